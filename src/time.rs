@@ -1,0 +1,127 @@
+//! Message timestamps as VRPN carries them: a `struct timeval` of seconds and microseconds
+//! since the Unix epoch.
+//!
+//! On the wire the seconds are the low 32 bits of `time_t` (WIRE.md §12). We keep them in an
+//! `i64` so arithmetic never overflows; header seconds are decoded as unsigned 32-bit (what a
+//! 64-bit C++ peer does) and payload timevals as signed.
+
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+/// A point in time as VRPN messages carry it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct TimeVal {
+    /// Whole seconds since 1970-01-01 UTC.
+    pub sec: i64,
+    /// Microseconds, 0..=999_999 once normalised.
+    pub usec: i64,
+}
+
+impl TimeVal {
+    /// The zero time (what C++ devices stamp before their first report).
+    pub const ZERO: TimeVal = TimeVal { sec: 0, usec: 0 };
+
+    /// Builds a normalised time value.
+    pub fn new(sec: i64, usec: i64) -> TimeVal {
+        TimeVal { sec, usec }.normalised()
+    }
+
+    /// The current wall-clock time, as C++ `vrpn_gettimeofday` reads it.
+    pub fn now() -> TimeVal {
+        let d = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or(Duration::ZERO);
+        TimeVal {
+            sec: d.as_secs() as i64,
+            usec: d.subsec_micros() as i64,
+        }
+    }
+
+    /// Seconds as a float, the form `--json` output and most applications want.
+    pub fn as_secs_f64(&self) -> f64 {
+        self.sec as f64 + self.usec as f64 * 1e-6
+    }
+
+    /// Builds a time value from float seconds (rounded to the microsecond).
+    pub fn from_secs_f64(secs: f64) -> TimeVal {
+        let sec = secs.floor();
+        let usec = ((secs - sec) * 1e6).round();
+        TimeVal::new(sec as i64, usec as i64)
+    }
+
+    /// Total microseconds, handy for differences.
+    pub fn as_micros(&self) -> i64 {
+        self.sec * 1_000_000 + self.usec
+    }
+
+    /// Builds a time value from total microseconds.
+    pub fn from_micros(us: i64) -> TimeVal {
+        TimeVal::new(us.div_euclid(1_000_000), us.rem_euclid(1_000_000))
+    }
+
+    /// `self - earlier` in seconds (negative when `earlier` is later).
+    pub fn seconds_since(&self, earlier: TimeVal) -> f64 {
+        (self.as_micros() - earlier.as_micros()) as f64 * 1e-6
+    }
+
+    /// Adds a duration.
+    pub fn plus(&self, d: Duration) -> TimeVal {
+        TimeVal::from_micros(self.as_micros() + d.as_micros() as i64)
+    }
+
+    fn normalised(self) -> TimeVal {
+        let total = self.sec * 1_000_000 + self.usec;
+        TimeVal {
+            sec: total.div_euclid(1_000_000),
+            usec: total.rem_euclid(1_000_000),
+        }
+    }
+
+    /// The two 32-bit words sent on the wire (low 32 bits of the seconds).
+    pub fn to_wire(&self) -> (u32, u32) {
+        (self.sec as u32, self.usec as u32)
+    }
+
+    /// Decodes header words: seconds unsigned (as a 64-bit C++ peer reads them).
+    pub fn from_header_words(sec: u32, usec: u32) -> TimeVal {
+        TimeVal {
+            sec: sec as i64,
+            usec: usec as i64,
+        }
+    }
+
+    /// Decodes a timeval inside a payload: both words signed (`vrpn_unbuffer(timeval)`).
+    pub fn from_payload_words(sec: i32, usec: i32) -> TimeVal {
+        TimeVal {
+            sec: sec as i64,
+            usec: usec as i64,
+        }
+    }
+}
+
+impl std::fmt::Display for TimeVal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}.{:06}", self.sec, self.usec)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalises_and_round_trips_micros() {
+        let t = TimeVal::new(10, 1_500_000);
+        assert_eq!(t, TimeVal { sec: 11, usec: 500_000 });
+        assert_eq!(TimeVal::from_micros(t.as_micros()), t);
+        let neg = TimeVal::from_micros(-1);
+        assert_eq!(neg, TimeVal { sec: -1, usec: 999_999 });
+        assert!((t.seconds_since(TimeVal::new(10, 0)) - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn header_seconds_are_unsigned() {
+        let t = TimeVal::from_header_words(0xFFFF_FFFF, 5);
+        assert_eq!(t.sec, 4_294_967_295);
+        assert_eq!(t.to_wire(), (0xFFFF_FFFF, 5));
+    }
+}
