@@ -50,7 +50,12 @@ pub mod class {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WireError {
     /// Fewer bytes than the structure needs.
-    Truncated { needed: usize, available: usize },
+    Truncated {
+        /// Bytes the structure needs.
+        needed: usize,
+        /// Bytes that were there.
+        available: usize,
+    },
     /// The header's length field is below the 24-byte header size.
     LengthTooShort(u32),
     /// The header's length field exceeds what a C++ peer may send.

@@ -1,0 +1,276 @@
+//! Handler tables and callback lists that user code may re-enter.
+//!
+//! A callback may register another callback, send a message or read device state while it runs.
+//! Lists therefore never hold a `RefCell` borrow across a call: each entry is an
+//! `Rc<RefCell<dyn FnMut>>`, fetched by index with a short borrow (cloning an `Rc` allocates
+//! nothing) and called with the list released. A callback that is already running is skipped
+//! rather than re-entered, which is what makes a double borrow impossible at run time.
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
+use crate::time::TimeVal;
+
+/// Local id of a sender name on a connection.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SenderId(pub i32);
+
+/// Local id of a message type name on a connection.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TypeId(pub i32);
+
+impl SenderId {
+    /// A sender the peer never described: such messages reach only any-sender handlers.
+    pub const UNKNOWN: SenderId = SenderId(-1);
+}
+
+/// One message as handlers see it: local ids, the sender's timestamp, the payload.
+#[derive(Clone, Copy, Debug)]
+pub struct Message<'a> {
+    /// The sender's timestamp (never adjusted, as in VRPN 07).
+    pub time: TimeVal,
+    /// Local sender id, or [`SenderId::UNKNOWN`].
+    pub sender: SenderId,
+    /// Local type id.
+    pub type_id: TypeId,
+    /// The payload, without padding.
+    pub payload: &'a [u8],
+}
+
+/// Identifies a registered handler or callback so it can be removed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct HandlerId(u64);
+
+type Callback<T> = Rc<RefCell<dyn FnMut(&T)>>;
+
+/// A list of callbacks over values of type `T`, safe to modify and re-enter from a callback.
+pub struct CallbackList<T: ?Sized> {
+    entries: RefCell<Vec<(HandlerId, Callback<T>)>>,
+    next_id: Cell<u64>,
+}
+
+impl<T: ?Sized> Default for CallbackList<T> {
+    fn default() -> Self {
+        CallbackList {
+            entries: RefCell::new(Vec::new()),
+            next_id: Cell::new(1),
+        }
+    }
+}
+
+impl<T: ?Sized> CallbackList<T> {
+    /// Adds a callback; callbacks run in registration order.
+    pub fn add(&self, f: impl FnMut(&T) + 'static) -> HandlerId {
+        let id = HandlerId(self.next_id.get());
+        self.next_id.set(id.0 + 1);
+        self.entries
+            .borrow_mut()
+            .push((id, Rc::new(RefCell::new(f))));
+        id
+    }
+
+    /// Removes a callback; returns whether it was present.
+    pub fn remove(&self, id: HandlerId) -> bool {
+        let mut e = self.entries.borrow_mut();
+        let before = e.len();
+        e.retain(|(i, _)| *i != id);
+        e.len() != before
+    }
+
+    /// Number of callbacks.
+    pub fn len(&self) -> usize {
+        self.entries.borrow().len()
+    }
+
+    /// True when no callback is registered.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Calls every callback with `value`. Allocation-free.
+    pub fn call(&self, value: &T) {
+        let mut i = 0;
+        loop {
+            let cb = match self.entries.borrow().get(i) {
+                Some((_, cb)) => cb.clone(),
+                None => break,
+            };
+            if let Ok(mut f) = cb.try_borrow_mut() {
+                f(value);
+            }
+            i += 1;
+        }
+    }
+}
+
+/// Which senders a handler listens to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SenderFilter {
+    /// Every sender, known or not (`vrpn_ANY_SENDER`).
+    Any,
+    /// One sender.
+    Only(SenderId),
+}
+
+type MessageHandler = Rc<RefCell<dyn FnMut(&Message<'_>)>>;
+
+struct HandlerEntry {
+    id: HandlerId,
+    sender: SenderFilter,
+    f: MessageHandler,
+}
+
+/// Message handlers by local type id, plus handlers for every type.
+#[derive(Default)]
+pub(crate) struct HandlerTable {
+    by_type: RefCell<Vec<Vec<HandlerEntry>>>,
+    any_type: RefCell<Vec<HandlerEntry>>,
+    next_id: Cell<u64>,
+}
+
+impl HandlerTable {
+    pub(crate) fn add(
+        &self,
+        type_id: Option<TypeId>,
+        sender: SenderFilter,
+        f: impl FnMut(&Message<'_>) + 'static,
+    ) -> HandlerId {
+        let id = HandlerId(self.next_id.get() + 1);
+        self.next_id.set(id.0);
+        let entry = HandlerEntry {
+            id,
+            sender,
+            f: Rc::new(RefCell::new(f)),
+        };
+        match type_id {
+            Some(t) => {
+                let mut by_type = self.by_type.borrow_mut();
+                let idx = t.0.max(0) as usize;
+                if by_type.len() <= idx {
+                    by_type.resize_with(idx + 1, Vec::new);
+                }
+                by_type[idx].push(entry);
+            }
+            None => self.any_type.borrow_mut().push(entry),
+        }
+        id
+    }
+
+    pub(crate) fn remove(&self, id: HandlerId) -> bool {
+        let mut found = false;
+        for list in self.by_type.borrow_mut().iter_mut() {
+            let before = list.len();
+            list.retain(|e| e.id != id);
+            found |= list.len() != before;
+        }
+        let mut any = self.any_type.borrow_mut();
+        let before = any.len();
+        any.retain(|e| e.id != id);
+        found || any.len() != before
+    }
+
+    /// True when some handler could want messages of this type (lets senders skip work).
+    pub(crate) fn has_handlers(&self, type_id: TypeId) -> bool {
+        !self.any_type.borrow().is_empty()
+            || self
+                .by_type
+                .borrow()
+                .get(type_id.0.max(0) as usize)
+                .is_some_and(|l| !l.is_empty())
+    }
+
+    /// Calls the handlers for `msg`: type-specific ones first, then any-type ones.
+    pub(crate) fn dispatch(&self, msg: &Message<'_>) {
+        if msg.type_id.0 >= 0 {
+            let t = msg.type_id.0 as usize;
+            let mut i = 0;
+            loop {
+                let f = {
+                    let by_type = self.by_type.borrow();
+                    match by_type.get(t).and_then(|l| l.get(i)) {
+                        Some(e) => Self::wants(e, msg).then(|| e.f.clone()),
+                        None => break,
+                    }
+                };
+                if let Some(f) = f {
+                    if let Ok(mut f) = f.try_borrow_mut() {
+                        f(msg);
+                    }
+                }
+                i += 1;
+            }
+        }
+        let mut i = 0;
+        loop {
+            let f = {
+                let any = self.any_type.borrow();
+                match any.get(i) {
+                    Some(e) => Self::wants(e, msg).then(|| e.f.clone()),
+                    None => break,
+                }
+            };
+            if let Some(f) = f {
+                if let Ok(mut f) = f.try_borrow_mut() {
+                    f(msg);
+                }
+            }
+            i += 1;
+        }
+    }
+
+    fn wants(e: &HandlerEntry, msg: &Message<'_>) -> bool {
+        match e.sender {
+            SenderFilter::Any => true,
+            SenderFilter::Only(s) => s == msg.sender,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn callbacks_may_register_callbacks_and_reenter() {
+        let list: Rc<CallbackList<i32>> = Rc::new(CallbackList::default());
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let (l2, s2) = (list.clone(), seen.clone());
+        list.add(move |v| {
+            s2.borrow_mut().push(*v);
+            if *v == 1 {
+                let s3 = s2.clone();
+                l2.add(move |v| s3.borrow_mut().push(v * 10));
+                // Re-entering the list from inside a callback: the running one is skipped.
+                l2.call(&2);
+            }
+        });
+        list.call(&1);
+        assert_eq!(*seen.borrow(), vec![1, 20, 10]);
+    }
+
+    #[test]
+    fn sender_filter_and_any_type() {
+        let t = HandlerTable::default();
+        let hits = Rc::new(Cell::new(0));
+        let h = hits.clone();
+        t.add(
+            Some(TypeId(3)),
+            SenderFilter::Only(SenderId(1)),
+            move |_| h.set(h.get() + 1),
+        );
+        let h = hits.clone();
+        let any = t.add(None, SenderFilter::Any, move |_| h.set(h.get() + 100));
+        let msg = |s| Message {
+            time: TimeVal::ZERO,
+            sender: SenderId(s),
+            type_id: TypeId(3),
+            payload: &[],
+        };
+        t.dispatch(&msg(1));
+        t.dispatch(&msg(2));
+        assert_eq!(hits.get(), 201);
+        assert!(t.remove(any));
+        t.dispatch(&msg(1));
+        assert_eq!(hits.get(), 202);
+    }
+}

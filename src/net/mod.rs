@@ -1,0 +1,1402 @@
+//! The mio shell: sockets, readiness and the byte movement between sockets and endpoints.
+//!
+//! [`Core`] owns every socket of one connection and the sans-IO [`Endpoint`]s they feed. It
+//! never calls user code: it produces [`Delivery`] items that the public
+//! [`Connection`](crate::Connection) hands to handlers with no borrow held.
+
+use std::collections::VecDeque;
+use std::io::{self, Read, Write};
+use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+use mio::net::{TcpListener, TcpStream, UdpSocket};
+use mio::{Events, Interest, Poll, Token};
+
+use crate::connection::endpoint::{Endpoint, Phase};
+use crate::connection::names::Names;
+use crate::connection::{ConnectionState, Limits, Notice, Severity};
+use crate::error::Error;
+use crate::time::TimeVal;
+use crate::wire::{self, class, system, Cookie, COOKIE_LEN};
+
+const SERVER_TCP: Token = Token(0);
+const SERVER_UDP: Token = Token(1);
+const CLIENT_LISTEN: Token = Token(2);
+const CLIENT_LOB: Token = Token(3);
+const PEER_BASE: usize = 16;
+const TOK_TCP: usize = 0;
+const TOK_UDP_IN: usize = 1;
+
+/// Local connection events, delivered as messages of types 0–3 from sender 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LocalEvent {
+    GotFirstConnection = 0,
+    GotConnection = 1,
+    DroppedConnection = 2,
+    DroppedLastConnection = 3,
+}
+
+/// What the core hands to the dispatcher, in order.
+pub(crate) enum Delivery {
+    /// A user message; its payload is in `Core::scratch[..len]`.
+    Message {
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        len: usize,
+    },
+    Event(LocalEvent),
+    Notice(Notice),
+    /// A sender name the peer described for the first time (local id).
+    PeerSender(i32),
+}
+
+/// Sockets of one peer.
+pub(crate) struct PeerIo {
+    tcp: TcpStream,
+    udp_in: Option<UdpSocket>,
+    udp_out: Option<UdpSocket>,
+    tcp_readable: bool,
+    udp_readable: bool,
+    tcp_writable: bool,
+    /// Deadline for a call-back or TCP connect to complete.
+    connect_deadline: Option<Instant>,
+}
+
+pub(crate) struct Peer {
+    pub(crate) ep: Endpoint,
+    io: PeerIo,
+}
+
+/// Server-side listening sockets.
+pub(crate) struct ServerNet {
+    tcp: TcpListener,
+    udp: UdpSocket,
+    nic: Option<Ipv4Addr>,
+    tcp_readable: bool,
+    udp_readable: bool,
+    pub(crate) port: u16,
+}
+
+/// Client-side connection attempt state.
+pub(crate) struct ClientNet {
+    host: String,
+    server: SocketAddrV4,
+    tcp_only: bool,
+    listener: Option<TcpListener>,
+    listen_addr: SocketAddrV4,
+    listener_readable: bool,
+    lob: Option<UdpSocket>,
+    lob_readable: bool,
+    next_attempt: Instant,
+    attempts_since_connected: u32,
+    waiting_since: Instant,
+    warned_no_answer: bool,
+    warned_refused: bool,
+    ever_connected: bool,
+    /// Sequence numbers carried across reconnects, as a C++ client does.
+    seq: (u32, u32),
+    /// Per-endpoint state is kept here while no peer exists (reconnect).
+    pub(crate) retry_interval: Duration,
+}
+
+pub(crate) enum Kind {
+    Loopback,
+    Server(ServerNet),
+    Client(Box<ClientNet>),
+}
+
+/// Everything a connection owns except its handlers.
+pub(crate) struct Core {
+    pub(crate) kind: Kind,
+    pub(crate) names: Names,
+    pub(crate) peers: Vec<Option<Peer>>,
+    poll: Option<Poll>,
+    events: Events,
+    pub(crate) scratch: Vec<u8>,
+    pub(crate) connected: usize,
+    queue: VecDeque<Delivery>,
+    /// Local ids newly registered because a peer described them: to be described to all peers.
+    to_describe: Vec<(bool, i32)>,
+    pub(crate) limits: Limits,
+    cursor: usize,
+    budget: usize,
+    /// Set whenever a socket showed activity; the server loop uses it for its busy-poll window.
+    pub(crate) activity: bool,
+}
+
+fn would_block(e: &io::Error) -> bool {
+    e.kind() == io::ErrorKind::WouldBlock
+}
+
+fn interrupted(e: &io::Error) -> bool {
+    e.kind() == io::ErrorKind::Interrupted
+}
+
+/// Resolves `host` to its first IPv4 address.
+pub(crate) fn resolve_v4(host: &str, port: u16) -> Result<SocketAddrV4, Error> {
+    let addrs = (host, port).to_socket_addrs().map_err(|e| Error::Resolve {
+        host: host.to_string(),
+        reason: e.to_string(),
+    })?;
+    for a in addrs {
+        if let SocketAddr::V4(v4) = a {
+            return Ok(v4);
+        }
+    }
+    Err(Error::Resolve {
+        host: host.to_string(),
+        reason: "no IPv4 address (VRPN 07 is IPv4 only)".into(),
+    })
+}
+
+/// The local address that routes to `server`, found the way C++ does: connect a throw-away
+/// UDP socket towards the server and read its local name.
+fn local_ip_towards(server: Ipv4Addr) -> Ipv4Addr {
+    let probe = std::net::UdpSocket::bind((Ipv4Addr::UNSPECIFIED, 0))
+        .and_then(|s| s.connect((server, wire::DEFAULT_PORT)).map(|_| s))
+        .and_then(|s| s.local_addr());
+    match probe {
+        Ok(SocketAddr::V4(a)) if !a.ip().is_unspecified() => *a.ip(),
+        _ => Ipv4Addr::UNSPECIFIED,
+    }
+}
+
+impl Core {
+    fn with_kind(kind: Kind, poll: Option<Poll>, limits: Limits) -> Core {
+        Core {
+            kind,
+            names: Names::new(),
+            peers: Vec::new(),
+            poll,
+            events: Events::with_capacity(256),
+            scratch: vec![0; wire::MAX_TCP_PADDED_PAYLOAD],
+            connected: 0,
+            queue: VecDeque::with_capacity(64),
+            to_describe: Vec::with_capacity(16),
+            limits,
+            cursor: 0,
+            budget: 0,
+            activity: false,
+        }
+    }
+
+    pub(crate) fn loopback(limits: Limits) -> Core {
+        Core::with_kind(Kind::Loopback, None, limits)
+    }
+
+    /// A server listening on UDP and TCP at `nic:port` (all interfaces without a NIC).
+    pub(crate) fn server(nic: Option<Ipv4Addr>, port: u16, limits: Limits) -> Result<Core, Error> {
+        let ip = nic.unwrap_or(Ipv4Addr::UNSPECIFIED);
+        let poll = Poll::new().map_err(|e| Error::io("creating the poll instance", e))?;
+        // Bind TCP first so port 0 picks a number that UDP then shares.
+        let mut tcp = TcpListener::bind(SocketAddr::V4(SocketAddrV4::new(ip, port)))
+            .map_err(|e| Error::io(format!("listening on TCP {ip}:{port}"), e))?;
+        let port = tcp
+            .local_addr()
+            .map_err(|e| Error::io("reading the TCP listener address", e))?
+            .port();
+        let mut udp = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(ip, port)))
+            .map_err(|e| Error::io(format!("listening on UDP {ip}:{port}"), e))?;
+        poll.registry()
+            .register(&mut tcp, SERVER_TCP, Interest::READABLE)
+            .and_then(|_| {
+                poll.registry()
+                    .register(&mut udp, SERVER_UDP, Interest::READABLE)
+            })
+            .map_err(|e| Error::io("registering listeners", e))?;
+        let net = ServerNet {
+            tcp,
+            udp,
+            nic,
+            tcp_readable: true,
+            udp_readable: true,
+            port,
+        };
+        Ok(Core::with_kind(Kind::Server(net), Some(poll), limits))
+    }
+
+    /// A client of the server at `host:port`; the first attempt starts at once.
+    pub(crate) fn client(
+        host: &str,
+        port: u16,
+        tcp_only: bool,
+        limits: Limits,
+    ) -> Result<Core, Error> {
+        let server = resolve_v4(host, port)?;
+        let poll = Poll::new().map_err(|e| Error::io("creating the poll instance", e))?;
+        let now = Instant::now();
+        let mut net = ClientNet {
+            host: host.to_string(),
+            server,
+            tcp_only,
+            listener: None,
+            listen_addr: SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0),
+            listener_readable: false,
+            lob: None,
+            lob_readable: false,
+            next_attempt: now,
+            attempts_since_connected: 0,
+            waiting_since: now,
+            warned_no_answer: false,
+            warned_refused: false,
+            ever_connected: false,
+            seq: (0, 0),
+            retry_interval: limits.retry_interval,
+        };
+        if !tcp_only {
+            let ip = local_ip_towards(*server.ip());
+            let mut l = TcpListener::bind(SocketAddr::V4(SocketAddrV4::new(ip, 0)))
+                .map_err(|e| Error::io("opening the TCP call-back listener", e))?;
+            let port = l
+                .local_addr()
+                .map_err(|e| Error::io("reading the call-back listener address", e))?
+                .port();
+            let shown_ip = if ip.is_unspecified() {
+                Ipv4Addr::LOCALHOST
+            } else {
+                ip
+            };
+            net.listen_addr = SocketAddrV4::new(shown_ip, port);
+            poll.registry()
+                .register(&mut l, CLIENT_LISTEN, Interest::READABLE)
+                .map_err(|e| Error::io("registering the call-back listener", e))?;
+            net.listener = Some(l);
+        }
+        let mut core = Core::with_kind(Kind::Client(Box::new(net)), Some(poll), limits);
+        core.client_attempt(now);
+        Ok(core)
+    }
+
+    pub(crate) fn state(&self) -> ConnectionState {
+        match &self.kind {
+            Kind::Loopback => ConnectionState::Connected,
+            Kind::Server(_) => {
+                if self.connected > 0 {
+                    ConnectionState::Connected
+                } else {
+                    ConnectionState::Listening
+                }
+            }
+            Kind::Client(c) => {
+                if self.connected > 0 {
+                    ConnectionState::Connected
+                } else if c.ever_connected {
+                    ConnectionState::Reconnecting
+                } else {
+                    ConnectionState::Connecting
+                }
+            }
+        }
+    }
+
+    fn notice(&mut self, severity: Severity, text: String) {
+        self.queue
+            .push_back(Delivery::Notice(Notice { severity, text }));
+    }
+
+    // ------------------------------------------------------------------ readiness
+
+    /// Waits up to `timeout` for socket readiness and records it. Returns whether any arrived.
+    pub(crate) fn poll_io(&mut self, timeout: Option<Duration>) -> Result<bool, Error> {
+        let Some(poll) = self.poll.as_mut() else {
+            if let Some(t) = timeout {
+                if !t.is_zero() {
+                    std::thread::sleep(t);
+                }
+            }
+            return Ok(false);
+        };
+        match poll.poll(&mut self.events, timeout) {
+            Ok(()) => {}
+            Err(e) if interrupted(&e) => return Ok(false),
+            Err(e) => return Err(Error::io("polling sockets", e)),
+        }
+        let mut any = false;
+        for ev in self.events.iter() {
+            any = true;
+            let t = ev.token().0;
+            match (&mut self.kind, t) {
+                (Kind::Server(s), 0) => s.tcp_readable = true,
+                (Kind::Server(s), 1) => s.udp_readable = true,
+                (Kind::Client(c), 2) => c.listener_readable = true,
+                (Kind::Client(c), 3) => c.lob_readable = true,
+                (_, t) if t >= PEER_BASE => {
+                    let slot = (t - PEER_BASE) / 4;
+                    if let Some(Some(p)) = self.peers.get_mut(slot) {
+                        match (t - PEER_BASE) % 4 {
+                            TOK_TCP => {
+                                if ev.is_readable() || ev.is_read_closed() || ev.is_error() {
+                                    p.io.tcp_readable = true;
+                                }
+                                if ev.is_writable() || ev.is_error() {
+                                    p.io.tcp_writable = true;
+                                }
+                            }
+                            TOK_UDP_IN => p.io.udp_readable = true,
+                            _ => {}
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        self.activity |= any;
+        Ok(any)
+    }
+
+    // ------------------------------------------------------------------ connection set-up
+
+    /// Accepts new peers, completes connects, retries client attempts. Called every mainloop.
+    pub(crate) fn service_setup(&mut self, now: Instant) {
+        if matches!(self.kind, Kind::Server(_)) {
+            self.server_accept_requests(now);
+            self.server_accept_tcp();
+        }
+        if matches!(self.kind, Kind::Client(_)) {
+            self.client_service(now);
+        }
+        for i in 0..self.peers.len() {
+            self.complete_connect(i, now);
+        }
+    }
+
+    fn server_accept_requests(&mut self, now: Instant) {
+        let mut buf = [0u8; 200];
+        loop {
+            let Kind::Server(s) = &mut self.kind else {
+                return;
+            };
+            if !s.udp_readable {
+                return;
+            }
+            let (n, from) = match s.udp.recv_from(&mut buf) {
+                Ok(r) => r,
+                Err(e) if would_block(&e) => {
+                    s.udp_readable = false;
+                    return;
+                }
+                Err(e) if interrupted(&e) => continue,
+                Err(_) => continue,
+            };
+            let nic = s.nic;
+            let req = match wire::lob::parse_request(&buf[..n]) {
+                Ok(r) => r,
+                Err(e) => {
+                    self.notice(
+                        Severity::Warning,
+                        format!("ignored a bad connection request from {from}: {e}"),
+                    );
+                    continue;
+                }
+            };
+            if self.live_peers() >= self.limits.max_connections {
+                self.notice(
+                    Severity::Warning,
+                    format!(
+                        "refused connection request from {from}: {} clients already connected \
+                         (limit)",
+                        self.limits.max_connections
+                    ),
+                );
+                continue;
+            }
+            let target = match req.host.parse::<Ipv4Addr>() {
+                Ok(ip) => SocketAddrV4::new(ip, req.port),
+                Err(_) => match resolve_v4(req.host, req.port) {
+                    Ok(a) => a,
+                    Err(e) => {
+                        self.notice(Severity::Warning, format!("connection request: {e}"));
+                        continue;
+                    }
+                },
+            };
+            let _ = nic;
+            // A client that re-sends its request while its call-back is already in progress
+            // must not get a second connection.
+            let dup = self.peers.iter().flatten().any(|p| {
+                !p.ep.tcp_only
+                    && p.ep.phase != Phase::Connected
+                    && p.io.tcp.peer_addr().ok() == Some(SocketAddr::V4(target))
+            });
+            if dup {
+                continue;
+            }
+            match TcpStream::connect(SocketAddr::V4(target)) {
+                Ok(stream) => {
+                    let _ = stream.set_nodelay(true);
+                    let deadline = now + self.limits.connect_timeout;
+                    self.add_peer(stream, false, target.to_string(), Some(deadline));
+                }
+                Err(e) => self.notice(
+                    Severity::Warning,
+                    format!("cannot call back client at {target}: {e}"),
+                ),
+            }
+        }
+    }
+
+    fn server_accept_tcp(&mut self) {
+        loop {
+            let Kind::Server(s) = &mut self.kind else {
+                return;
+            };
+            if !s.tcp_readable {
+                return;
+            }
+            match s.tcp.accept() {
+                Ok((stream, addr)) => {
+                    if self.live_peers() >= self.limits.max_connections {
+                        self.notice(
+                            Severity::Warning,
+                            format!(
+                                "refused TCP client {addr}: {} clients already connected (limit)",
+                                self.limits.max_connections
+                            ),
+                        );
+                        continue;
+                    }
+                    let _ = stream.set_nodelay(true);
+                    let slot = self.add_peer(stream, true, addr.to_string(), None);
+                    self.start_handshake(slot);
+                }
+                Err(e) if would_block(&e) => s.tcp_readable = false,
+                Err(e) if interrupted(&e) => {}
+                Err(_) => s.tcp_readable = false,
+            }
+        }
+    }
+
+    fn live_peers(&self) -> usize {
+        self.peers.iter().flatten().count()
+    }
+
+    fn add_peer(
+        &mut self,
+        mut tcp: TcpStream,
+        tcp_only: bool,
+        peer: String,
+        connect_deadline: Option<Instant>,
+    ) -> usize {
+        let slot = match self.peers.iter().position(Option::is_none) {
+            Some(s) => s,
+            None => {
+                self.peers.push(None);
+                self.peers.len() - 1
+            }
+        };
+        if let Some(poll) = &self.poll {
+            let _ = poll.registry().register(
+                &mut tcp,
+                Token(PEER_BASE + slot * 4 + TOK_TCP),
+                Interest::READABLE | Interest::WRITABLE,
+            );
+        }
+        let mut ep = Endpoint::new(tcp_only, peer, self.limits.max_pending_output);
+        if let Kind::Client(c) = &self.kind {
+            ep.seq_tcp = c.seq.0;
+            ep.seq_udp = c.seq.1;
+        }
+        self.peers[slot] = Some(Peer {
+            ep,
+            io: PeerIo {
+                tcp,
+                udp_in: None,
+                udp_out: None,
+                tcp_readable: true,
+                udp_readable: false,
+                tcp_writable: true,
+                connect_deadline,
+            },
+        });
+        slot
+    }
+
+    /// Checks whether a pending TCP connect finished, failed or timed out.
+    fn complete_connect(&mut self, i: usize, now: Instant) {
+        let Some(p) = self.peers[i].as_mut() else {
+            return;
+        };
+        if p.ep.phase != Phase::TcpConnecting {
+            return;
+        }
+        if !p.io.tcp_writable {
+            if p.io.connect_deadline.is_some_and(|d| now >= d) {
+                let who = p.ep.peer.clone();
+                self.drop_peer(i, format!("TCP connection to {who} timed out"), now);
+            }
+            return;
+        }
+        match p.io.tcp.take_error() {
+            Ok(Some(e)) | Err(e) => {
+                let who = p.ep.peer.clone();
+                self.connect_failed(i, who, e, now);
+                return;
+            }
+            Ok(None) => {}
+        }
+        match p.io.tcp.peer_addr() {
+            Ok(_) => self.start_handshake(i),
+            Err(e) if e.kind() == io::ErrorKind::NotConnected => {
+                p.io.tcp_writable = false;
+            }
+            Err(e) => {
+                let who = p.ep.peer.clone();
+                self.connect_failed(i, who, e, now);
+            }
+        }
+    }
+
+    fn connect_failed(&mut self, i: usize, who: String, e: io::Error, now: Instant) {
+        let text = match &mut self.kind {
+            Kind::Client(c) => {
+                let first = !c.warned_refused;
+                c.warned_refused = true;
+                if !first {
+                    None
+                } else if e.kind() == io::ErrorKind::ConnectionRefused {
+                    Some(format!(
+                        "no VRPN server is listening on {who} (connection refused); will keep \
+                         retrying every {:?}",
+                        c.retry_interval
+                    ))
+                } else {
+                    Some(format!("cannot connect to {who}: {e}; will keep retrying"))
+                }
+            }
+            _ => Some(format!(
+                "cannot call back client at {who}: {e} (a firewall on the client may block the \
+                 call-back; the client can use the tcp:// name form)"
+            )),
+        };
+        self.remove_peer_silently(i);
+        if let Some(t) = text {
+            self.notice(Severity::Warning, t);
+        }
+        if let Kind::Client(c) = &mut self.kind {
+            c.next_attempt = now + c.retry_interval;
+        }
+    }
+
+    /// TCP is up: send our cookie at once and wait for the peer's.
+    fn start_handshake(&mut self, i: usize) {
+        let Some(p) = self.peers[i].as_mut() else {
+            return;
+        };
+        p.ep.phase = Phase::AwaitingCookie;
+        p.io.connect_deadline = None;
+        let _ = p.ep.tx.push_raw(&Cookie::ours(0).to_bytes());
+        p.io.tcp_writable = true;
+        self.flush_peer(i);
+    }
+
+    fn client_service(&mut self, now: Instant) {
+        // Accept a call-back.
+        let accepted = {
+            let Kind::Client(c) = &mut self.kind else {
+                return;
+            };
+            let mut got = None;
+            if c.listener_readable {
+                if let Some(l) = &c.listener {
+                    loop {
+                        match l.accept() {
+                            Ok((s, addr)) => {
+                                if got.is_none() {
+                                    got = Some((s, addr));
+                                }
+                                // Further call-backs while one is live are dropped on close.
+                            }
+                            Err(e) if would_block(&e) => {
+                                c.listener_readable = false;
+                                break;
+                            }
+                            Err(e) if interrupted(&e) => {}
+                            Err(_) => {
+                                c.listener_readable = false;
+                                break;
+                            }
+                        }
+                    }
+                }
+            }
+            got
+        };
+        let has_peer = self.peers.iter().flatten().next().is_some();
+        if let Some((stream, addr)) = accepted {
+            if !has_peer {
+                let _ = stream.set_nodelay(true);
+                if let Kind::Client(c) = &mut self.kind {
+                    if let (Some(mut lob), Some(poll)) = (c.lob.take(), &self.poll) {
+                        let _ = poll.registry().deregister(&mut lob);
+                    }
+                }
+                let slot = self.add_peer(stream, false, addr.to_string(), None);
+                self.start_handshake(slot);
+                return;
+            }
+        }
+        // Diagnose a lob that draws ICMP port-unreachable.
+        let mut refused = false;
+        if let Kind::Client(c) = &mut self.kind {
+            if c.lob_readable {
+                c.lob_readable = false;
+                if let Some(lob) = &c.lob {
+                    let mut b = [0u8; 16];
+                    if let Err(e) = lob.recv(&mut b) {
+                        refused = e.kind() == io::ErrorKind::ConnectionRefused;
+                    }
+                }
+            }
+        }
+        if refused {
+            let first = if let Kind::Client(c) = &mut self.kind {
+                let f = !c.warned_refused;
+                c.warned_refused = true;
+                f
+            } else {
+                false
+            };
+            if first {
+                let server = self.client_server_text();
+                self.notice(
+                    Severity::Warning,
+                    format!(
+                        "no VRPN server at {server}: its UDP port answered 'port unreachable'; \
+                         will keep retrying"
+                    ),
+                );
+            }
+        }
+        if has_peer {
+            return;
+        }
+        // No answer yet: warn once, then retry on schedule.
+        let warn = if let Kind::Client(c) = &mut self.kind {
+            if !c.tcp_only
+                && !c.warned_no_answer
+                && now.duration_since(c.waiting_since) >= self.limits.no_answer_warning
+            {
+                c.warned_no_answer = true;
+                Some((c.host.clone(), c.server.port(), c.listen_addr))
+            } else {
+                None
+            }
+        } else {
+            None
+        };
+        if let Some((host, port, listen)) = warn {
+            self.notice(
+                Severity::Warning,
+                format!(
+                    "no answer from the VRPN server at {host}:{port} after {:?}: either no \
+                     server runs there, or it cannot connect back to this machine at {listen} \
+                     (a firewall or NAT). If the server runs, use DEVICE@tcp://{host}:{port} to \
+                     connect over TCP only",
+                    self.limits.no_answer_warning
+                ),
+            );
+        }
+        let due = matches!(&self.kind, Kind::Client(c) if now >= c.next_attempt);
+        if due {
+            self.client_attempt(now);
+        }
+    }
+
+    fn client_server_text(&self) -> String {
+        match &self.kind {
+            Kind::Client(c) => format!("{}:{}", c.host, c.server.port()),
+            _ => String::new(),
+        }
+    }
+
+    /// Sends a connection request (new lob socket each time) or starts a TCP connect.
+    fn client_attempt(&mut self, now: Instant) {
+        let Kind::Client(c) = &mut self.kind else {
+            return;
+        };
+        c.next_attempt = now + c.retry_interval;
+        c.attempts_since_connected += 1;
+        if c.tcp_only {
+            let server = c.server;
+            match TcpStream::connect(SocketAddr::V4(server)) {
+                Ok(s) => {
+                    let _ = s.set_nodelay(true);
+                    let deadline = now + self.limits.connect_timeout;
+                    self.add_peer(s, true, server.to_string(), Some(deadline));
+                }
+                Err(e) => self.notice(
+                    Severity::Warning,
+                    format!("cannot start a TCP connection to {server}: {e}"),
+                ),
+            }
+            return;
+        }
+        if let (Some(mut old), Some(poll)) = (c.lob.take(), &self.poll) {
+            let _ = poll.registry().deregister(&mut old);
+        }
+        let server = c.server;
+        let mut text = [0u8; 64];
+        let ip = c.listen_addr.ip().to_string();
+        let n = wire::lob::encode_request(&mut text, &ip, c.listen_addr.port());
+        let lob = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0)))
+            .and_then(|s| s.connect(SocketAddr::V4(server)).map(|_| s));
+        match lob {
+            Ok(mut s) => {
+                let _ = s.send(&text[..n]);
+                if let Some(poll) = &self.poll {
+                    let _ = poll
+                        .registry()
+                        .register(&mut s, CLIENT_LOB, Interest::READABLE);
+                }
+                c.lob = Some(s);
+            }
+            Err(e) => {
+                let t = format!("cannot send a connection request to {server}: {e}");
+                self.notice(Severity::Warning, t);
+            }
+        }
+    }
+
+    // ------------------------------------------------------------------ incoming
+
+    /// The next thing to deliver, or `None` when all input is consumed.
+    pub(crate) fn next_delivery(&mut self, now: Instant) -> Option<Delivery> {
+        loop {
+            if let Some(d) = self.queue.pop_front() {
+                return Some(d);
+            }
+            if !self.to_describe.is_empty() {
+                self.describe_new_names();
+                continue;
+            }
+            let n = self.peers.len();
+            if n == 0 {
+                return None;
+            }
+            let mut produced = false;
+            for k in 0..n {
+                let i = (self.cursor + k) % n;
+                if self.budget >= self.limits.max_messages_per_peer_per_loop {
+                    self.budget = 0;
+                    continue;
+                }
+                if let Some(d) = self.next_from_peer(i, now) {
+                    self.cursor = i;
+                    self.budget += 1;
+                    return Some(d);
+                }
+                self.budget = 0;
+                if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                    produced = true;
+                    self.cursor = i;
+                    break;
+                }
+            }
+            if !produced {
+                return None;
+            }
+        }
+    }
+
+    /// Starts a new mainloop pass (resets per-pass budgets).
+    pub(crate) fn begin_pass(&mut self) {
+        self.budget = 0;
+    }
+
+    fn next_from_peer(&mut self, i: usize, now: Instant) -> Option<Delivery> {
+        loop {
+            let p = self.peers[i].as_mut()?;
+            match p.ep.phase {
+                Phase::TcpConnecting => return None,
+                Phase::AwaitingCookie => {
+                    if let Some(bytes) = p.ep.rx.take_exact(COOKIE_LEN) {
+                        let cookie = Cookie::parse(bytes).expect("24 bytes");
+                        self.handle_cookie(i, cookie, now);
+                        if !self.queue.is_empty() {
+                            return self.queue.pop_front();
+                        }
+                        continue;
+                    }
+                }
+                Phase::Connected => {
+                    let tcp_only = p.ep.tcp_only;
+                    match p.ep.rx.next_message() {
+                        Some(Ok((h, payload))) => {
+                            let len = payload.len();
+                            self.scratch[..len].copy_from_slice(payload);
+                            if let Some(d) = Self::handle_message(
+                                &mut self.names,
+                                &mut self.to_describe,
+                                &mut self.queue,
+                                p,
+                                h,
+                                &self.scratch[..len],
+                                tcp_only,
+                            ) {
+                                return Some(d);
+                            }
+                            if p.ep.phase == Phase::TcpConnecting {
+                                // handle_message asked for a drop via the phase flag.
+                                let reason = format!("protocol error from {}", p.ep.peer);
+                                self.drop_peer(i, reason, now);
+                                return self.queue.pop_front();
+                            }
+                            if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                                return None;
+                            }
+                            continue;
+                        }
+                        Some(Err(e)) => {
+                            let reason = format!("malformed message from {}: {e}", p.ep.peer);
+                            self.drop_peer(i, reason, now);
+                            return self.queue.pop_front();
+                        }
+                        None => {}
+                    }
+                }
+            }
+            // Need more TCP bytes.
+            let p = self.peers[i].as_mut()?;
+            if p.io.tcp_readable {
+                let spare = p.ep.rx.spare();
+                if spare.is_empty() {
+                    // Cannot happen: the buffer holds a maximal message; treat as a protocol error.
+                    let reason = format!("{} sent a message larger than the buffer", p.ep.peer);
+                    self.drop_peer(i, reason, now);
+                    return self.queue.pop_front();
+                }
+                match p.io.tcp.read(spare) {
+                    Ok(0) => {
+                        let reason = format!("{} closed the connection", p.ep.peer);
+                        self.drop_peer(i, reason, now);
+                        return self.queue.pop_front();
+                    }
+                    Ok(n) => {
+                        p.ep.rx.commit(n);
+                        self.activity = true;
+                        continue;
+                    }
+                    Err(e) if would_block(&e) => p.io.tcp_readable = false,
+                    Err(e) if interrupted(&e) => continue,
+                    Err(e) => {
+                        let reason = format!("connection to {} failed: {e}", p.ep.peer);
+                        self.drop_peer(i, reason, now);
+                        return self.queue.pop_front();
+                    }
+                }
+            }
+            // Then UDP.
+            let p = self.peers[i].as_mut()?;
+            if p.ep.phase != Phase::Connected {
+                return None;
+            }
+            if p.ep.udp_rx.is_drained() {
+                if !p.io.udp_readable {
+                    return None;
+                }
+                let Some(sock) = &p.io.udp_in else {
+                    p.io.udp_readable = false;
+                    return None;
+                };
+                match sock.recv(&mut p.ep.udp_rx.buf) {
+                    Ok(n) => {
+                        p.ep.udp_rx.len = n;
+                        p.ep.udp_rx.pos = 0;
+                        self.activity = true;
+                    }
+                    Err(e) if would_block(&e) => {
+                        p.io.udp_readable = false;
+                        return None;
+                    }
+                    Err(_) => return None,
+                }
+            }
+            let inbox = &p.ep.udp_rx;
+            let dg = &inbox.buf[inbox.pos..inbox.len];
+            let mut it = wire::DatagramMessages::new(dg);
+            match it.next() {
+                Some(Ok((h, payload))) => {
+                    let advance = h.wire_size().min(dg.len());
+                    // Copy out before borrowing the endpoint mutably.
+                    let len = payload.len();
+                    self.scratch[..len].copy_from_slice(payload);
+                    let p = self.peers[i].as_mut()?;
+                    p.ep.udp_rx.pos += advance;
+                    let tcp_only = p.ep.tcp_only;
+                    if let Some(d) = Self::handle_message(
+                        &mut self.names,
+                        &mut self.to_describe,
+                        &mut self.queue,
+                        p,
+                        h,
+                        &self.scratch[..len],
+                        tcp_only,
+                    ) {
+                        return Some(d);
+                    }
+                    if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                        return None;
+                    }
+                }
+                Some(Err(e)) => {
+                    // C++ drops the whole connection on a bad datagram; we drop the datagram,
+                    // since the inbound socket accepts any source and one stray packet must not
+                    // cut a client off.
+                    let p = self.peers[i].as_mut()?;
+                    p.ep.udp_rx.pos = p.ep.udp_rx.len;
+                    let t = format!("discarded a malformed UDP datagram from {}: {e}", p.ep.peer);
+                    self.notice(Severity::Warning, t);
+                    return self.queue.pop_front();
+                }
+                None => {
+                    let p = self.peers[i].as_mut()?;
+                    p.ep.udp_rx.pos = p.ep.udp_rx.len;
+                }
+            }
+        }
+    }
+
+    /// Interprets one message whose payload the caller copied into `Core::scratch`: system
+    /// messages update tables; user messages are translated and returned for delivery.
+    #[allow(clippy::too_many_arguments)]
+    fn handle_message(
+        names: &mut Names,
+        to_describe: &mut Vec<(bool, i32)>,
+        queue: &mut VecDeque<Delivery>,
+        p: &mut Peer,
+        h: wire::Header,
+        payload: &[u8],
+        tcp_only: bool,
+    ) -> Option<Delivery> {
+        match h.type_id {
+            system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION => {
+                let is_sender = h.type_id == system::SENDER_DESCRIPTION;
+                let name = match system::decode_description(payload) {
+                    Ok(n) => n,
+                    Err(e) => {
+                        queue.push_back(Delivery::Notice(Notice {
+                            severity: Severity::Error,
+                            text: format!("bad description from {}: {e}", p.ep.peer),
+                        }));
+                        p.ep.phase = Phase::TcpConnecting;
+                        return None;
+                    }
+                };
+                let table = if is_sender {
+                    &mut names.senders
+                } else {
+                    &mut names.types
+                };
+                let (local, new) = match table.register(name) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        queue.push_back(Delivery::Notice(Notice {
+                            severity: Severity::Error,
+                            text: format!("{} described a name we cannot hold: {e}", p.ep.peer),
+                        }));
+                        p.ep.phase = Phase::TcpConnecting;
+                        return None;
+                    }
+                };
+                let remote_table = if is_sender {
+                    &mut p.ep.remote_senders
+                } else {
+                    &mut p.ep.remote_types
+                };
+                let was_known = Endpoint::lookup(remote_table, h.sender) == local;
+                if !Endpoint::map_remote(remote_table, h.sender, local) {
+                    queue.push_back(Delivery::Notice(Notice {
+                        severity: Severity::Error,
+                        text: format!(
+                            "{} described id {} outside VRPN's 0..2000 range",
+                            p.ep.peer, h.sender
+                        ),
+                    }));
+                    p.ep.phase = Phase::TcpConnecting;
+                    return None;
+                }
+                if new {
+                    to_describe.push((is_sender, local));
+                }
+                if is_sender && !was_known {
+                    queue.push_back(Delivery::PeerSender(local));
+                }
+                None
+            }
+            system::UDP_DESCRIPTION => {
+                if tcp_only || p.ep.udp_ready {
+                    if !tcp_only {
+                        // A repeated description (new port after the peer reconnected its UDP).
+                        p.ep.udp_ready = false;
+                    } else {
+                        return None;
+                    }
+                }
+                let host = match system::decode_udp_description(payload) {
+                    Ok(h) => h,
+                    Err(_) => return None,
+                };
+                let port = h.sender;
+                let ip: Ipv4Addr = match host.parse() {
+                    Ok(ip) => ip,
+                    Err(_) => match resolve_v4(host, 0) {
+                        Ok(a) => *a.ip(),
+                        Err(_) => return None,
+                    },
+                };
+                if !(1..=65535).contains(&port) {
+                    return None;
+                }
+                let target = SocketAddr::V4(SocketAddrV4::new(ip, port as u16));
+                let sock =
+                    UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0)))
+                        .and_then(|s| s.connect(target).map(|_| s));
+                if let Ok(s) = sock {
+                    p.io.udp_out = Some(s);
+                    p.ep.udp_ready = true;
+                }
+                None
+            }
+            system::LOG_DESCRIPTION => None,
+            system::DISCONNECT => {
+                p.ep.clear_remote_names();
+                None
+            }
+            t if t < 0 => None,
+            t => {
+                let local_type = Endpoint::lookup(&p.ep.remote_types, t);
+                if local_type < 0 {
+                    return None; // never described: ignored, as C++ does
+                }
+                let local_sender = Endpoint::lookup(&p.ep.remote_senders, h.sender);
+                Some(Delivery::Message {
+                    time: h.time,
+                    sender: local_sender,
+                    type_id: local_type,
+                    len: payload.len(),
+                })
+            }
+        }
+    }
+
+    fn handle_cookie(&mut self, i: usize, cookie: Cookie, now: Instant) {
+        if let Err(e) = cookie.check() {
+            let who = self.peers[i]
+                .as_ref()
+                .map(|p| p.ep.peer.clone())
+                .unwrap_or_default();
+            self.drop_peer(i, format!("{who}: {e}"), now);
+            return;
+        }
+        let tv = TimeVal::now();
+        let nic = match &self.kind {
+            Kind::Server(s) => s.nic,
+            _ => None,
+        };
+        let Some(p) = self.peers[i].as_mut() else {
+            return;
+        };
+        if cookie.minor_differs() {
+            let t = format!(
+                "{} speaks VRPN {} and we speak {}: minor versions differ, which is not \
+                 normally a problem",
+                p.ep.peer,
+                cookie.version(),
+                Cookie::ours(0).version()
+            );
+            self.queue.push_back(Delivery::Notice(Notice {
+                severity: Severity::Info,
+                text: t,
+            }));
+        }
+        p.ep.peer_version = Some(cookie.version());
+        p.ep.phase = Phase::Connected;
+        // UDP inbound socket and its description, unless TCP-only.
+        if !p.ep.tcp_only {
+            let local_ip = match p.io.tcp.local_addr() {
+                Ok(SocketAddr::V4(a)) => *a.ip(),
+                _ => Ipv4Addr::LOCALHOST,
+            };
+            let bind_ip = nic.unwrap_or(Ipv4Addr::UNSPECIFIED);
+            if let Ok(mut u) = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(bind_ip, 0))) {
+                let port = u.local_addr().map(|a| a.port()).unwrap_or(0);
+                if let Some(poll) = &self.poll {
+                    let _ = poll.registry().register(
+                        &mut u,
+                        Token(PEER_BASE + i * 4 + TOK_UDP_IN),
+                        Interest::READABLE,
+                    );
+                }
+                p.io.udp_in = Some(u);
+                p.io.udp_readable = true;
+                let ip_text = nic.unwrap_or(local_ip).to_string();
+                let mut buf = [0u8; 32];
+                let n = system::encode_udp_description(&mut buf, &ip_text);
+                let _ = p.ep.pack_always(
+                    tv,
+                    port as i32,
+                    system::UDP_DESCRIPTION,
+                    &buf[..n],
+                    class::RELIABLE,
+                );
+            }
+        }
+        let mut buf = [0u8; 128];
+        for (id, name) in self.names.senders.iter() {
+            let n = system::encode_description(&mut buf, name);
+            let _ = p.ep.pack_always(
+                tv,
+                id,
+                system::SENDER_DESCRIPTION,
+                &buf[..n],
+                class::RELIABLE,
+            );
+        }
+        for (id, name) in self.names.types.iter() {
+            let n = system::encode_description(&mut buf, name);
+            let _ =
+                p.ep.pack_always(tv, id, system::TYPE_DESCRIPTION, &buf[..n], class::RELIABLE);
+        }
+        if let Kind::Client(c) = &mut self.kind {
+            c.ever_connected = true;
+            c.warned_no_answer = false;
+            c.warned_refused = false;
+            c.attempts_since_connected = 0;
+        }
+        self.flush_peer(i);
+        if self.connected == 0 {
+            self.queue
+                .push_back(Delivery::Event(LocalEvent::GotFirstConnection));
+        }
+        self.connected += 1;
+        self.queue
+            .push_back(Delivery::Event(LocalEvent::GotConnection));
+    }
+
+    /// Describes names that peers taught us to every connected peer (the C++ echo).
+    fn describe_new_names(&mut self) {
+        let list = std::mem::take(&mut self.to_describe);
+        for &(is_sender, id) in &list {
+            self.describe_to_all(is_sender, id);
+        }
+        self.to_describe = list;
+        self.to_describe.clear();
+    }
+
+    /// Sends one description to every connected peer.
+    pub(crate) fn describe_to_all(&mut self, is_sender: bool, id: i32) {
+        let name = if is_sender {
+            self.names.senders.name(id)
+        } else {
+            self.names.types.name(id)
+        };
+        let Some(name) = name else {
+            return;
+        };
+        let mut buf = [0u8; 128];
+        let n = system::encode_description(&mut buf, name);
+        let t = if is_sender {
+            system::SENDER_DESCRIPTION
+        } else {
+            system::TYPE_DESCRIPTION
+        };
+        let tv = TimeVal::now();
+        for p in self.peers.iter_mut().flatten() {
+            let _ = p.ep.pack(tv, id, t, &buf[..n], class::RELIABLE);
+        }
+    }
+
+    // ------------------------------------------------------------------ outgoing
+
+    /// Queues a message to every connected peer. Peers whose backlog overflows are dropped.
+    pub(crate) fn pack_to_peers(
+        &mut self,
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        payload: &[u8],
+        class_of_service: u32,
+    ) {
+        let mut overflow = None;
+        for (i, p) in self.peers.iter_mut().enumerate() {
+            if let Some(p) = p {
+                if p.ep
+                    .pack(time, sender, type_id, payload, class_of_service)
+                    .is_err()
+                {
+                    overflow = Some(i);
+                }
+            }
+        }
+        if let Some(i) = overflow {
+            // Rare path: one slow peer at a time is enough to handle per message.
+            let limit = self.limits.max_pending_output;
+            let who = self.peers[i]
+                .as_ref()
+                .map(|p| p.ep.peer.clone())
+                .unwrap_or_default();
+            self.drop_peer(
+                i,
+                format!("{who} is not reading: more than {limit} bytes of reliable output pending"),
+                Instant::now(),
+            );
+        }
+    }
+
+    /// Writes what the peers' buffers hold, as far as the sockets take it.
+    pub(crate) fn flush(&mut self) {
+        for i in 0..self.peers.len() {
+            self.flush_peer(i);
+        }
+    }
+
+    fn flush_peer(&mut self, i: usize) {
+        let Some(p) = self.peers[i].as_mut() else {
+            return;
+        };
+        if p.ep.phase == Phase::TcpConnecting {
+            return;
+        }
+        let mut failed = None;
+        while p.ep.tx.pending_len() > 0 {
+            match p.io.tcp.write(p.ep.tx.pending()) {
+                Ok(0) => break,
+                Ok(n) => p.ep.tx.consume(n),
+                Err(e) if would_block(&e) => {
+                    p.io.tcp_writable = false;
+                    break;
+                }
+                Err(e) if interrupted(&e) => {}
+                Err(e) => {
+                    failed = Some(e);
+                    break;
+                }
+            }
+        }
+        if let Some(sock) = &p.io.udp_out {
+            while let Some(dg) = p.ep.udp_tx.front() {
+                match sock.send(dg) {
+                    Ok(_) => p.ep.udp_tx.pop_front(),
+                    Err(e) if would_block(&e) => break,
+                    // Unreliable: a refused or failed datagram is simply lost.
+                    Err(_) => p.ep.udp_tx.pop_front(),
+                }
+            }
+        } else {
+            p.ep.udp_tx.clear();
+        }
+        if let Some(e) = failed {
+            let reason = format!("sending to {} failed: {e}", p.ep.peer);
+            self.drop_peer(i, reason, Instant::now());
+        }
+    }
+
+    /// Bytes of reliable output waiting for a peer (for tests and diagnostics).
+    pub(crate) fn pending_output(&self) -> usize {
+        self.peers
+            .iter()
+            .flatten()
+            .map(|p| p.ep.tx.pending_len())
+            .sum()
+    }
+
+    // ------------------------------------------------------------------ drops
+
+    fn remove_peer_silently(&mut self, i: usize) {
+        if let Some(mut p) = self.peers[i].take() {
+            if let Kind::Client(c) = &mut self.kind {
+                c.seq = (p.ep.seq_tcp, p.ep.seq_udp);
+            }
+            if let Some(poll) = &self.poll {
+                let _ = poll.registry().deregister(&mut p.io.tcp);
+                if let Some(u) = p.io.udp_in.as_mut() {
+                    let _ = poll.registry().deregister(u);
+                }
+            }
+        }
+    }
+
+    /// Drops a peer: closes its sockets, discards its output, fires the dropped events if it
+    /// had connected, and (client) schedules the reconnect.
+    pub(crate) fn drop_peer(&mut self, i: usize, reason: String, now: Instant) {
+        let was_connected = self.peers[i]
+            .as_ref()
+            .is_some_and(|p| p.ep.phase == Phase::Connected);
+        self.remove_peer_silently(i);
+        let is_client = matches!(self.kind, Kind::Client(_));
+        if let Kind::Client(c) = &mut self.kind {
+            c.next_attempt = now;
+            c.waiting_since = now;
+        }
+        let severity = if is_client {
+            Severity::Warning
+        } else {
+            Severity::Info
+        };
+        let text = if is_client && was_connected {
+            format!("{reason}; reconnecting")
+        } else {
+            reason
+        };
+        self.notice(severity, text);
+        if was_connected {
+            self.connected -= 1;
+            self.queue
+                .push_back(Delivery::Event(LocalEvent::DroppedConnection));
+            if self.connected == 0 {
+                self.queue
+                    .push_back(Delivery::Event(LocalEvent::DroppedLastConnection));
+            }
+        }
+    }
+
+    /// The server's port (after binding port 0, the one the OS chose).
+    pub(crate) fn server_port(&self) -> Option<u16> {
+        match &self.kind {
+            Kind::Server(s) => Some(s.port),
+            _ => None,
+        }
+    }
+
+    /// The remote sender names every connected peer described.
+    pub(crate) fn peer_sender_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for p in self.peers.iter().flatten() {
+            for &local in &p.ep.remote_senders {
+                if let Some(n) = self.names.senders.name(local) {
+                    if !out.iter().any(|o| o == n) {
+                        out.push(n.to_string());
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Descriptions of connected peers (address and VRPN version).
+    pub(crate) fn peer_descriptions(&self) -> Vec<(String, Option<String>)> {
+        self.peers
+            .iter()
+            .flatten()
+            .filter(|p| p.ep.phase == Phase::Connected)
+            .map(|p| (p.ep.peer.clone(), p.ep.peer_version.clone()))
+            .collect()
+    }
+
+    /// When the core next needs attention even without socket activity (client retries).
+    pub(crate) fn next_deadline(&self) -> Option<Instant> {
+        let mut d = None;
+        if let Kind::Client(c) = &self.kind {
+            if self.peers.iter().flatten().next().is_none() {
+                d = Some(c.next_attempt);
+            }
+        }
+        for p in self.peers.iter().flatten() {
+            if let Some(cd) = p.io.connect_deadline {
+                d = Some(d.map_or(cd, |x: Instant| x.min(cd)));
+            }
+        }
+        d
+    }
+}
