@@ -158,8 +158,8 @@ impl<W: Write> LogWriter<W> {
                 return Ok(());
             }
         }
-        self.flush_some(usize::MAX)?;
-        Ok(())
+        // Everything goes out; the buffer then holds at least MIN_BUFFER_LEN free bytes.
+        self.flush_all()
     }
 
     /// Writes at most `max_bytes` of the buffered bytes to the sink. Returns the bytes written,
