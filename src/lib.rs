@@ -38,6 +38,7 @@ pub mod connection;
 pub mod devices;
 pub mod dispatch;
 mod error;
+pub mod log;
 pub mod name;
 mod net;
 pub mod time;

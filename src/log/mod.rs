@@ -1,0 +1,36 @@
+//! VRPN log files (`.vrpn` stream files, LOGFILE.md): the entry codec, a reader, a buffered
+//! writer, and the name tables a reader rebuilds from the descriptions in a log.
+//!
+//! A file is the 24-byte cookie followed by entries, each a 24-byte header of six big-endian
+//! words (type, sender, seconds, microseconds, payload length, zero) and the unpadded payload.
+//! This module does no networking and no replay pacing; it turns files into [`LogEntry`] views
+//! and messages into bytes identical to what C++ VRPN writes.
+//!
+//! ```no_run
+//! use vrpn::log::{LogReader, NameTable};
+//!
+//! let log = LogReader::open("server.vrpn")?;
+//! let mut names = NameTable::new();
+//! for entry in log.entries() {
+//!     let entry = entry?;
+//!     names.observe(&entry).ok();
+//!     if !entry.is_system() {
+//!         println!("{} {:?} from {:?}", entry.time(),
+//!                  names.type_name(entry.type_id()), names.sender_name(entry.sender()));
+//!     }
+//! }
+//! # Ok::<(), vrpn::log::LogError>(())
+//! ```
+
+pub mod format;
+pub mod names;
+pub mod reader;
+pub mod writer;
+
+pub use format::{
+    decode_entry, encode_entry, entry_len, EntryFault, EntryHeader, EntryProblem, EntryWalker,
+    LogEntry, SystemEntry, ENTRY_HEADER_LEN, MAX_ENTRY_PAYLOAD,
+};
+pub use names::{NameEvent, NameTable};
+pub use reader::{check_log_cookie, CookieProblem, Entries, LogError, LogReader};
+pub use writer::{log_cookie_from_peer, LogWriter, DEFAULT_BUFFER_LEN, MIN_BUFFER_LEN};
