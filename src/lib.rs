@@ -41,6 +41,7 @@ mod error;
 pub mod log;
 pub mod name;
 mod net;
+pub mod server;
 pub mod time;
 pub mod wire;
 

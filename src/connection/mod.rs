@@ -465,9 +465,10 @@ impl Connection {
         Ok(())
     }
 
-    /// Blocks until a socket of this connection is ready or `timeout` passes, then runs
-    /// [`mainloop`](Self::mainloop). Returns whether there was socket activity.
-    pub fn wait_and_mainloop(&self, timeout: Duration) -> Result<bool, Error> {
+    /// Blocks until a socket of this connection is ready or `timeout` passes (or a client's
+    /// next connection attempt is due). Dispatches nothing: call [`mainloop`](Self::mainloop)
+    /// next. Returns whether a socket became ready.
+    pub fn wait(&self, timeout: Duration) -> Result<bool, Error> {
         let timeout = {
             let core = self.inner.core.borrow();
             match core.next_deadline() {
@@ -475,12 +476,10 @@ impl Connection {
                 None => timeout,
             }
         };
-        let any = self.inner.core.borrow_mut().poll_io(Some(timeout))?;
-        self.mainloop()?;
-        Ok(any)
+        self.inner.core.borrow_mut().poll_io(Some(timeout))
     }
 
-    /// True once since the last call if sockets showed any activity (for busy-poll windows).
+    /// True once since the last call if data arrived on any socket (for busy-poll windows).
     pub fn take_activity(&self) -> bool {
         std::mem::take(&mut self.inner.core.borrow_mut().activity)
     }

@@ -314,7 +314,8 @@ impl Core {
         }
         let mut any = false;
         for ev in self.events.iter() {
-            any = true;
+            // Only incoming data counts as activity: write-space events follow every send.
+            any |= ev.is_readable();
             let t = ev.token().0;
             match (&mut self.kind, t) {
                 (Kind::Server(s), 0) => s.tcp_readable = true,

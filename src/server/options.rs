@@ -1,0 +1,175 @@
+//! The `vrpn_server` command line, with the C++ meanings (CONFIG.md §1).
+
+use std::net::Ipv4Addr;
+use std::time::Duration;
+
+/// How the server loop waits between passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SleepPolicy {
+    /// Block in the poll until a socket is ready or a device deadline comes, then keep polling
+    /// without blocking for `busy_window` after incoming traffic. Latency of a spinning server,
+    /// about 0% CPU when idle. The default.
+    EventDriven {
+        /// How long to keep spinning after incoming data.
+        busy_window: Duration,
+        /// Longest single block (`-millisleep N` with N > 0 caps it at N ms).
+        max_block: Duration,
+    },
+    /// Never block (`-millisleep 0` or `-millisleep -1`): lowest latency, one core at 100%.
+    Spin,
+}
+
+/// Parsed `vrpn_server` options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ServerOptions {
+    /// Configuration file (`-f`, default `vrpn.cfg`).
+    pub config: String,
+    /// Warn and skip bad config entries instead of aborting (`-warn`).
+    pub warn_only: bool,
+    /// Verbose (`-v`): print what is opened, show NORMAL texts too.
+    pub verbose: bool,
+    /// Quit when the last client leaves (`-q`).
+    pub quit_after_last: bool,
+    /// Loop wait policy (`-millisleep`).
+    pub sleep: SleepPolicy,
+    /// Listen on one interface only (`-NIC ADDR`).
+    pub nic: Option<Ipv4Addr>,
+    /// Log incoming messages (`-li FILE`).
+    pub log_in: Option<String>,
+    /// Log outgoing messages (`-lo FILE`).
+    pub log_out: Option<String>,
+    /// Flush logs every pass (`-flush`).
+    pub flush_logs: bool,
+    /// Listen port (default 3883; 0 picks a free one and prints it).
+    pub port: u16,
+}
+
+impl Default for ServerOptions {
+    fn default() -> Self {
+        ServerOptions {
+            config: "vrpn.cfg".into(),
+            warn_only: false,
+            verbose: false,
+            quit_after_last: false,
+            sleep: SleepPolicy::EventDriven {
+                busy_window: Duration::from_millis(2),
+                max_block: Duration::from_millis(100),
+            },
+            nic: None,
+            log_in: None,
+            log_out: None,
+            flush_logs: false,
+            port: crate::wire::DEFAULT_PORT,
+        }
+    }
+}
+
+/// Usage text.
+pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millisleep N] \
+[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [PORT]
+  -f FILE         configuration file (default vrpn.cfg)
+  -warn           skip bad configuration entries with a warning instead of stopping
+  -v              verbose: print each device opened and show every text message
+  -q              quit when the last client disconnects
+  -millisleep N   N > 0: block at most N ms per pass; 0 or -1: spin (100% CPU);
+                  default: sleep until a socket or device needs service
+  -NIC ADDR       listen only on the interface with this IPv4 address
+  -li FILE        log incoming messages to FILE
+  -lo FILE        log outgoing messages to FILE
+  -flush          flush logs on every pass
+  PORT            UDP and TCP port to listen on (default 3883)";
+
+/// Parses arguments (without the program name). `Err` carries a message for the user.
+pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerOptions, String> {
+    let mut o = ServerOptions::default();
+    let mut it = args.into_iter();
+    let mut port_seen = false;
+    while let Some(a) = it.next() {
+        let mut value = |flag: &str| {
+            it.next()
+                .ok_or_else(|| format!("{flag} needs a value\n{USAGE}"))
+        };
+        match a.as_str() {
+            "-f" => o.config = value("-f")?,
+            "-warn" => o.warn_only = true,
+            "-v" => o.verbose = true,
+            "-q" => o.quit_after_last = true,
+            "-flush" => o.flush_logs = true,
+            "-li" => o.log_in = Some(value("-li")?),
+            "-lo" => o.log_out = Some(value("-lo")?),
+            "-NIC" => {
+                let v = value("-NIC")?;
+                o.nic = Some(v.parse().map_err(|_| {
+                    format!("-NIC {v:?}: expected the IPv4 address of a local interface")
+                })?);
+            }
+            "-millisleep" => {
+                let v = value("-millisleep")?;
+                let n: i64 = v
+                    .parse()
+                    .map_err(|_| format!("-millisleep {v:?}: expected a whole number"))?;
+                o.sleep = if n <= 0 {
+                    SleepPolicy::Spin
+                } else {
+                    SleepPolicy::EventDriven {
+                        busy_window: Duration::from_millis(2),
+                        max_block: Duration::from_millis(n as u64),
+                    }
+                };
+            }
+            "-h" | "--help" | "-help" => return Err(USAGE.to_string()),
+            s if s.starts_with('-') => return Err(format!("unknown option {s}\n{USAGE}")),
+            s => {
+                if port_seen {
+                    return Err(format!("unexpected argument {s:?}\n{USAGE}"));
+                }
+                port_seen = true;
+                o.port = s
+                    .parse()
+                    .map_err(|_| format!("port {s:?}: expected a number from 0 to 65535"))?;
+            }
+        }
+    }
+    Ok(o)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(s: &str) -> Vec<String> {
+        s.split_whitespace().map(str::to_string).collect()
+    }
+
+    #[test]
+    fn cpp_options() {
+        let o = parse_args(args(
+            "-f x.cfg -warn -v -q -millisleep 5 -NIC 127.0.0.1 4000",
+        ))
+        .unwrap();
+        assert_eq!(o.config, "x.cfg");
+        assert!(o.warn_only && o.verbose && o.quit_after_last);
+        assert_eq!(o.nic, Some(Ipv4Addr::LOCALHOST));
+        assert_eq!(o.port, 4000);
+        assert!(
+            matches!(o.sleep, SleepPolicy::EventDriven { max_block, .. } if max_block == Duration::from_millis(5))
+        );
+        assert_eq!(
+            parse_args(args("-millisleep -1")).unwrap().sleep,
+            SleepPolicy::Spin
+        );
+        assert_eq!(parse_args(args("")).unwrap(), ServerOptions::default());
+    }
+
+    #[test]
+    fn clear_errors() {
+        assert!(parse_args(args("-NIC eth0")).unwrap_err().contains("IPv4"));
+        assert!(parse_args(args("-f"))
+            .unwrap_err()
+            .contains("needs a value"));
+        assert!(parse_args(args("abc")).unwrap_err().contains("port"));
+        assert!(parse_args(args("-bogus"))
+            .unwrap_err()
+            .contains("unknown option"));
+    }
+}
