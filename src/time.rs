@@ -111,10 +111,22 @@ mod tests {
     #[test]
     fn normalises_and_round_trips_micros() {
         let t = TimeVal::new(10, 1_500_000);
-        assert_eq!(t, TimeVal { sec: 11, usec: 500_000 });
+        assert_eq!(
+            t,
+            TimeVal {
+                sec: 11,
+                usec: 500_000
+            }
+        );
         assert_eq!(TimeVal::from_micros(t.as_micros()), t);
         let neg = TimeVal::from_micros(-1);
-        assert_eq!(neg, TimeVal { sec: -1, usec: 999_999 });
+        assert_eq!(
+            neg,
+            TimeVal {
+                sec: -1,
+                usec: 999_999
+            }
+        );
         assert!((t.seconds_since(TimeVal::new(10, 0)) - 1.5).abs() < 1e-12);
     }
 

@@ -58,7 +58,13 @@ mod tests {
         let n = encode_request(&mut buf, "127.0.0.1", 48615);
         assert_eq!(&buf[..n], b"127.0.0.1 48615\0");
         let r = parse_request(&buf[..n]).unwrap();
-        assert_eq!(r, Request { host: "127.0.0.1", port: 48615 });
+        assert_eq!(
+            r,
+            Request {
+                host: "127.0.0.1",
+                port: 48615
+            }
+        );
     }
 
     #[test]
