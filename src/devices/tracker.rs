@@ -586,7 +586,7 @@ impl TrackerServer {
                 let mut buf = [0u8; codec::UnitToSensor::LEN];
                 codec::UnitToSensor {
                     sensor: i as i32,
-                    pad_word: 0,
+                    pad: 0,
                     pos: *pos,
                     quat: *quat,
                 }
@@ -659,7 +659,7 @@ impl TrackerServer {
         let mut buf = [0u8; codec::PosQuat::LEN];
         codec::PosQuat {
             sensor,
-            pad_word: sensor,
+            pad: sensor,
             pos,
             quat,
         }
@@ -692,7 +692,7 @@ impl TrackerServer {
         let mut buf = [0u8; codec::Velocity::LEN];
         codec::Velocity {
             sensor,
-            pad_word: sensor,
+            pad: sensor,
             vel,
             vel_quat,
             vel_quat_dt: dt,
@@ -715,7 +715,7 @@ impl TrackerServer {
         let mut buf = [0u8; codec::Acceleration::LEN];
         codec::Acceleration {
             sensor,
-            pad_word: sensor,
+            pad: sensor,
             acc,
             acc_quat,
             acc_quat_dt: dt,

@@ -1,267 +1,303 @@
-//! Tracker payloads (DEVICES.md §2).
+//! Tracker messages (DEVICES.md §2): poses, velocities and accelerations per sensor, the
+//! tracker-to-room and unit-to-sensor transforms, the workspace, and the client requests.
+//!
+//! Quaternions are `[x, y, z, w]`. The C++ remote checks every server->client length exactly
+//! (a wrong length drops the connection), so those decoders use exact lengths. The request
+//! types `Request_*` and `Reset_Origin` carry no payload and have no struct here.
 
-use byteorder::{BigEndian, ByteOrder};
-
-use crate::wire::{Result, WireError};
-
-/// `vrpn_Tracker Pos_Quat`.
+/// Pose report, server->client, 64 bytes ([`PosQuat`]).
 pub const POS_QUAT: &str = "vrpn_Tracker Pos_Quat";
-/// `vrpn_Tracker Velocity`.
+/// Velocity report, server->client, 72 bytes ([`Velocity`]).
 pub const VELOCITY: &str = "vrpn_Tracker Velocity";
-/// `vrpn_Tracker Acceleration`.
+/// Acceleration report, server->client, 72 bytes ([`Acceleration`]).
 pub const ACCELERATION: &str = "vrpn_Tracker Acceleration";
-/// `vrpn_Tracker To_Room`.
+/// Tracker-to-room transform reply, server->client, 56 bytes ([`ToRoom`]).
 pub const TO_ROOM: &str = "vrpn_Tracker To_Room";
-/// `vrpn_Tracker Unit_To_Sensor`.
+/// Unit-to-sensor transform reply, one per sensor, 64 bytes ([`UnitToSensor`]).
 pub const UNIT_TO_SENSOR: &str = "vrpn_Tracker Unit_To_Sensor";
-/// `vrpn_Tracker Request_Tracker_To_Room`.
-pub const REQUEST_TO_ROOM: &str = "vrpn_Tracker Request_Tracker_To_Room";
-/// `vrpn_Tracker Request_Unit_To_Sensor`.
+/// Client request for [`TO_ROOM`]; empty payload.
+pub const REQUEST_TRACKER_TO_ROOM: &str = "vrpn_Tracker Request_Tracker_To_Room";
+/// Client request for [`UNIT_TO_SENSOR`]; empty payload.
 pub const REQUEST_UNIT_TO_SENSOR: &str = "vrpn_Tracker Request_Unit_To_Sensor";
-/// `vrpn_Tracker Workspace`.
+/// Workspace reply, server->client, 48 bytes ([`Workspace`]).
 pub const WORKSPACE: &str = "vrpn_Tracker Workspace";
-/// `vrpn_Tracker Request_Tracker_Workspace`.
-pub const REQUEST_WORKSPACE: &str = "vrpn_Tracker Request_Tracker_Workspace";
-/// `vrpn_Tracker set_update_rate`.
+/// Client request for [`WORKSPACE`]; empty payload.
+pub const REQUEST_TRACKER_WORKSPACE: &str = "vrpn_Tracker Request_Tracker_Workspace";
+/// Client request for a report rate, 8 bytes ([`UpdateRate`]).
 pub const SET_UPDATE_RATE: &str = "vrpn_Tracker set_update_rate";
-/// `vrpn_Tracker Reset_Origin`.
+/// Client request to re-zero the tracker; empty payload.
 pub const RESET_ORIGIN: &str = "vrpn_Tracker Reset_Origin";
 
-/// Tracker type names in C++ registration order.
-pub const TYPE_NAMES: [&str; 11] = [
+/// Every tracker type name in C++ registration order.
+pub const TYPE_NAMES: &[&str] = &[
     POS_QUAT,
     VELOCITY,
     ACCELERATION,
     TO_ROOM,
     UNIT_TO_SENSOR,
-    REQUEST_TO_ROOM,
+    REQUEST_TRACKER_TO_ROOM,
     REQUEST_UNIT_TO_SENSOR,
     WORKSPACE,
-    REQUEST_WORKSPACE,
+    REQUEST_TRACKER_WORKSPACE,
     SET_UPDATE_RATE,
     RESET_ORIGIN,
 ];
 
-fn exact(buf: &[u8], len: usize) -> Result<()> {
-    if buf.len() != len {
-        return Err(WireError::BadValue("tracker payload length"));
-    }
-    Ok(())
-}
+/// The identity quaternion `[x, y, z, w]`.
+pub const IDENTITY_QUAT: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
 
-fn read_f64s<const N: usize>(buf: &[u8]) -> [f64; N] {
-    let mut out = [0.0; N];
-    for (i, v) in out.iter_mut().enumerate() {
-        *v = BigEndian::read_f64(&buf[i * 8..i * 8 + 8]);
+fixed_payload! {
+    /// `vrpn_Tracker Pos_Quat`: one sensor's pose in the tracker frame.
+    ///
+    /// Decoding is exact-length (64). C++ also refuses a negative sensor; that check belongs to
+    /// the caller. Use [`PosQuat::new`] to get the C++ filler (a copy of the sensor index).
+    pub struct PosQuat: exact {
+        /// Sensor index, 0-based.
+        pub sensor: i32,
+        /// Alignment filler as on the wire; C++ servers write the sensor index again.
+        pub pad: i32,
+        /// Position in metres, `[x, y, z]`.
+        pub pos: [f64; 3],
+        /// Orientation `[x, y, z, w]`.
+        pub quat: [f64; 4],
     }
-    out
-}
-
-fn write_f64s(buf: &mut [u8], vals: &[f64]) {
-    for (i, v) in vals.iter().enumerate() {
-        BigEndian::write_f64(&mut buf[i * 8..i * 8 + 8], *v);
-    }
-}
-
-/// A pose report: sensor, pad word, position, quaternion (x, y, z, w). 64 bytes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PosQuat {
-    /// Sensor index.
-    pub sensor: i32,
-    /// Alignment word; C++ servers repeat the sensor index here.
-    pub pad_word: i32,
-    /// Position.
-    pub pos: [f64; 3],
-    /// Orientation (x, y, z, w).
-    pub quat: [f64; 4],
 }
 
 impl PosQuat {
-    /// Payload length.
-    pub const LEN: usize = 64;
-
-    /// Decodes; the length must be exactly 64 (the C++ remote drops other lengths).
-    pub fn decode(buf: &[u8]) -> Result<Self> {
-        exact(buf, Self::LEN)?;
-        let v: [f64; 7] = read_f64s(&buf[8..]);
-        Ok(PosQuat {
-            sensor: BigEndian::read_i32(&buf[0..4]),
-            pad_word: BigEndian::read_i32(&buf[4..8]),
-            pos: [v[0], v[1], v[2]],
-            quat: [v[3], v[4], v[5], v[6]],
-        })
-    }
-
-    /// Encodes into the first 64 bytes of `buf`.
-    pub fn encode(&self, buf: &mut [u8]) -> usize {
-        BigEndian::write_i32(&mut buf[0..4], self.sensor);
-        BigEndian::write_i32(&mut buf[4..8], self.pad_word);
-        write_f64s(&mut buf[8..32], &self.pos);
-        write_f64s(&mut buf[32..64], &self.quat);
-        Self::LEN
-    }
-}
-
-macro_rules! rate_report {
-    ($name:ident, $doc:literal, $lin:ident, $rot:ident, $dt:ident) => {
-        #[doc = $doc]
-        #[derive(Clone, Copy, Debug, PartialEq)]
-        pub struct $name {
-            /// Sensor index.
-            pub sensor: i32,
-            /// Alignment word; C++ servers repeat the sensor index here.
-            pub pad_word: i32,
-            /// Linear part.
-            pub $lin: [f64; 3],
-            /// Rotation over `dt` (x, y, z, w).
-            pub $rot: [f64; 4],
-            /// Seconds the rotation spans.
-            pub $dt: f64,
+    /// A report as a C++ server builds it (filler = sensor index).
+    pub fn new(sensor: i32, pos: [f64; 3], quat: [f64; 4]) -> PosQuat {
+        PosQuat {
+            sensor,
+            pad: sensor,
+            pos,
+            quat,
         }
+    }
+}
 
-        impl $name {
-            /// Payload length.
-            pub const LEN: usize = 72;
+fixed_payload! {
+    /// `vrpn_Tracker Velocity`: one sensor's linear velocity and rotation rate.
+    ///
+    /// Decoding is exact-length (72). [`Velocity::new`] sets the C++ filler.
+    pub struct Velocity: exact {
+        /// Sensor index, 0-based.
+        pub sensor: i32,
+        /// Alignment filler as on the wire; C++ servers write the sensor index again.
+        pub pad: i32,
+        /// Linear velocity in m/s.
+        pub vel: [f64; 3],
+        /// Rotation the sensor undergoes during `vel_quat_dt` seconds, `[x, y, z, w]`.
+        pub vel_quat: [f64; 4],
+        /// Interval of `vel_quat`, in seconds.
+        pub vel_quat_dt: f64,
+    }
+}
 
-            /// Decodes; the length must be exactly 72.
-            pub fn decode(buf: &[u8]) -> Result<Self> {
-                exact(buf, Self::LEN)?;
-                let v: [f64; 8] = read_f64s(&buf[8..]);
-                Ok($name {
-                    sensor: BigEndian::read_i32(&buf[0..4]),
-                    pad_word: BigEndian::read_i32(&buf[4..8]),
-                    $lin: [v[0], v[1], v[2]],
-                    $rot: [v[3], v[4], v[5], v[6]],
-                    $dt: v[7],
-                })
-            }
-
-            /// Encodes into the first 72 bytes of `buf`.
-            pub fn encode(&self, buf: &mut [u8]) -> usize {
-                BigEndian::write_i32(&mut buf[0..4], self.sensor);
-                BigEndian::write_i32(&mut buf[4..8], self.pad_word);
-                write_f64s(&mut buf[8..32], &self.$lin);
-                write_f64s(&mut buf[32..64], &self.$rot);
-                BigEndian::write_f64(&mut buf[64..72], self.$dt);
-                Self::LEN
-            }
+impl Velocity {
+    /// A report as a C++ server builds it (filler = sensor index).
+    pub fn new(sensor: i32, vel: [f64; 3], vel_quat: [f64; 4], vel_quat_dt: f64) -> Velocity {
+        Velocity {
+            sensor,
+            pad: sensor,
+            vel,
+            vel_quat,
+            vel_quat_dt,
         }
-    };
-}
-
-rate_report!(
-    Velocity,
-    "A velocity report: sensor, pad, velocity, rotation over dt, dt. 72 bytes.",
-    vel,
-    vel_quat,
-    vel_quat_dt
-);
-rate_report!(
-    Acceleration,
-    "An acceleration report: sensor, pad, acceleration, rotation change over dt, dt. 72 bytes.",
-    acc,
-    acc_quat,
-    acc_quat_dt
-);
-
-/// Tracker-to-room transform: translation and rotation. 56 bytes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ToRoom {
-    /// Translation.
-    pub pos: [f64; 3],
-    /// Rotation (x, y, z, w).
-    pub quat: [f64; 4],
-}
-
-impl ToRoom {
-    /// Payload length.
-    pub const LEN: usize = 56;
-
-    /// Decodes; the length must be exactly 56.
-    pub fn decode(buf: &[u8]) -> Result<Self> {
-        exact(buf, Self::LEN)?;
-        let v: [f64; 7] = read_f64s(buf);
-        Ok(ToRoom {
-            pos: [v[0], v[1], v[2]],
-            quat: [v[3], v[4], v[5], v[6]],
-        })
-    }
-
-    /// Encodes into the first 56 bytes of `buf`.
-    pub fn encode(&self, buf: &mut [u8]) -> usize {
-        write_f64s(&mut buf[0..24], &self.pos);
-        write_f64s(&mut buf[24..56], &self.quat);
-        Self::LEN
     }
 }
 
-/// Unit-to-sensor transform of one sensor. 64 bytes; the pad word is 0.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct UnitToSensor {
-    /// Sensor index.
-    pub sensor: i32,
-    /// Alignment word (0 from C++).
-    pub pad_word: i32,
-    /// Translation.
-    pub pos: [f64; 3],
-    /// Rotation (x, y, z, w).
-    pub quat: [f64; 4],
+fixed_payload! {
+    /// `vrpn_Tracker Acceleration`: one sensor's linear and angular acceleration.
+    ///
+    /// Decoding is exact-length (72). [`Acceleration::new`] sets the C++ filler.
+    pub struct Acceleration: exact {
+        /// Sensor index, 0-based.
+        pub sensor: i32,
+        /// Alignment filler as on the wire; C++ servers write the sensor index again.
+        pub pad: i32,
+        /// Linear acceleration in m/s².
+        pub acc: [f64; 3],
+        /// Change of the velocity quaternion over `acc_quat_dt`, `[x, y, z, w]`.
+        pub acc_quat: [f64; 4],
+        /// Interval of `acc_quat`, in seconds.
+        pub acc_quat_dt: f64,
+    }
+}
+
+impl Acceleration {
+    /// A report as a C++ server builds it (filler = sensor index).
+    pub fn new(sensor: i32, acc: [f64; 3], acc_quat: [f64; 4], acc_quat_dt: f64) -> Acceleration {
+        Acceleration {
+            sensor,
+            pad: sensor,
+            acc,
+            acc_quat,
+            acc_quat_dt,
+        }
+    }
+}
+
+fixed_payload! {
+    /// `vrpn_Tracker To_Room`: the tracker-to-room transform. Exact length 56.
+    pub struct ToRoom: exact {
+        /// Translation `[x, y, z]`.
+        pub pos: [f64; 3],
+        /// Rotation `[x, y, z, w]`.
+        pub quat: [f64; 4],
+    }
+}
+
+fixed_payload! {
+    /// `vrpn_Tracker Unit_To_Sensor`: one sensor's unit-to-sensor transform. Exact length 64.
+    ///
+    /// Unlike the reports, C++ writes 0 into the filler here; [`UnitToSensor::new`] does too.
+    pub struct UnitToSensor: exact {
+        /// Sensor index, 0-based.
+        pub sensor: i32,
+        /// Alignment filler as on the wire (0 from C++).
+        pub pad: i32,
+        /// Translation `[x, y, z]`.
+        pub pos: [f64; 3],
+        /// Rotation `[x, y, z, w]`.
+        pub quat: [f64; 4],
+    }
 }
 
 impl UnitToSensor {
-    /// Payload length.
-    pub const LEN: usize = 64;
-
-    /// Decodes; the length must be exactly 64.
-    pub fn decode(buf: &[u8]) -> Result<Self> {
-        let p = PosQuat::decode(buf)?;
-        Ok(UnitToSensor {
-            sensor: p.sensor,
-            pad_word: p.pad_word,
-            pos: p.pos,
-            quat: p.quat,
-        })
-    }
-
-    /// Encodes into the first 64 bytes of `buf`.
-    pub fn encode(&self, buf: &mut [u8]) -> usize {
-        PosQuat {
-            sensor: self.sensor,
-            pad_word: self.pad_word,
-            pos: self.pos,
-            quat: self.quat,
+    /// A reply as a C++ server builds it (filler = 0).
+    pub fn new(sensor: i32, pos: [f64; 3], quat: [f64; 4]) -> UnitToSensor {
+        UnitToSensor {
+            sensor,
+            pad: 0,
+            pos,
+            quat,
         }
-        .encode(buf)
     }
 }
 
-/// Workspace box. 48 bytes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Workspace {
-    /// Minimum corner.
-    pub min: [f64; 3],
-    /// Maximum corner.
-    pub max: [f64; 3],
+fixed_payload! {
+    /// `vrpn_Tracker Workspace`: the axis-aligned working volume. Exact length 48.
+    pub struct Workspace: exact {
+        /// Minimum corner `[x, y, z]` in the tracker frame.
+        pub min: [f64; 3],
+        /// Maximum corner `[x, y, z]` in the tracker frame.
+        pub max: [f64; 3],
+    }
 }
 
-impl Workspace {
-    /// Payload length.
-    pub const LEN: usize = 48;
+fixed_payload! {
+    /// `vrpn_Tracker set_update_rate`: requested reports per second. Exact length 8 (the
+    /// Phantom, the one C++ server that reads it, refuses any other length).
+    pub struct UpdateRate: exact {
+        /// Requested samples per second.
+        pub rate: f64,
+    }
+}
 
-    /// Decodes; the length must be exactly 48.
-    pub fn decode(buf: &[u8]) -> Result<Self> {
-        exact(buf, Self::LEN)?;
-        let v: [f64; 6] = read_f64s(buf);
-        Ok(Workspace {
-            min: [v[0], v[1], v[2]],
-            max: [v[3], v[4], v[5]],
-        })
+#[cfg(test)]
+mod tests {
+    use super::super::test_util::{hex, round_trip};
+    use super::*;
+    use crate::wire::WireError;
+
+    #[test]
+    fn lengths_match_devices_md() {
+        assert_eq!(PosQuat::LEN, 64);
+        assert_eq!(Velocity::LEN, 72);
+        assert_eq!(Acceleration::LEN, 72);
+        assert_eq!(ToRoom::LEN, 56);
+        assert_eq!(UnitToSensor::LEN, 64);
+        assert_eq!(Workspace::LEN, 48);
+        assert_eq!(UpdateRate::LEN, 8);
     }
 
-    /// Encodes into the first 48 bytes of `buf`.
-    pub fn encode(&self, buf: &mut [u8]) -> usize {
-        write_f64s(&mut buf[0..24], &self.min);
-        write_f64s(&mut buf[24..48], &self.max);
-        Self::LEN
+    #[test]
+    fn round_trips() {
+        let b = round_trip!(
+            PosQuat,
+            PosQuat::new(3, [1.0, -2.5, 3.25], [0.5, 0.5, 0.5, 0.5])
+        );
+        assert_eq!(&b[..8], &[0, 0, 0, 3, 0, 0, 0, 3]);
+        round_trip!(
+            Velocity,
+            Velocity::new(1, [0.1, 0.2, 0.3], [0.0, 0.0, 0.0, 1.0], 0.9)
+        );
+        round_trip!(
+            Acceleration,
+            Acceleration::new(2, [9.81, 0.0, -1.0], IDENTITY_QUAT, 1.0)
+        );
+        round_trip!(
+            ToRoom,
+            ToRoom {
+                pos: [1.0, 2.0, 3.0],
+                quat: IDENTITY_QUAT
+            }
+        );
+        let b = round_trip!(
+            UnitToSensor,
+            UnitToSensor::new(7, [0.0; 3], [0.0, 1.0, 0.0, 0.0])
+        );
+        assert_eq!(&b[..8], &[0, 0, 0, 7, 0, 0, 0, 0]);
+        round_trip!(
+            Workspace,
+            Workspace {
+                min: [-0.5; 3],
+                max: [0.5; 3]
+            }
+        );
+        round_trip!(UpdateRate, UpdateRate { rate: 60.0 });
+    }
+
+    #[test]
+    fn exact_lengths_refuse_longer_payloads() {
+        let buf = [0u8; 80];
+        assert_eq!(
+            PosQuat::decode(&buf[..65]),
+            Err(WireError::BadValue("PosQuat payload length"))
+        );
+        assert!(Velocity::decode(&buf[..73]).is_err());
+        assert!(PosQuat::decode(&buf[..63]).is_err());
+    }
+
+    #[test]
+    fn golden_spin_pose_and_velocity() {
+        // tracker_spin: UDP datagram from vrpn_Tracker_Spin (sensor 0).
+        let p = hex(
+            "00000000000000000000000000000000000000000000000000000000000000000000000000000000\
+                     3fed6b350828d48400000000000000003fd92ea31f220275",
+        );
+        let pq = PosQuat::decode(&p).unwrap();
+        assert_eq!(pq.sensor, 0);
+        assert_eq!(pq.pad, 0);
+        assert_eq!(pq.pos, [0.0; 3]);
+        assert_eq!(pq.quat, [0.0, 0.9193368110051243, 0.0, 0.39347150841061956]);
+        let mut out = [0u8; 64];
+        pq.encode(&mut out);
+        assert_eq!(&out[..], &p[..]);
+
+        let v = hex(
+            "00000000000000000000000000000000000000000000000000000000000000000000000000000000\
+                     3fef9b24942fe45c00000000000000003fc4060b67a853773feccccccccccccd",
+        );
+        let vel = Velocity::decode(&v).unwrap();
+        assert_eq!(
+            vel.vel_quat,
+            [0.0, 0.9876883405951378, 0.0, 0.15643446504023092]
+        );
+        assert_eq!(vel.vel_quat_dt, 0.9);
+    }
+
+    #[test]
+    fn golden_pad_word_repeats_sensor() {
+        // tracker_udp_lob: vrpn_Tracker_NULL sensor 1, Pos_Quat and Acceleration.
+        let p = hex("00000001000000010000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000003ff0000000000000");
+        let pq = PosQuat::decode(&p).unwrap();
+        assert_eq!(pq, PosQuat::new(1, [0.0; 3], IDENTITY_QUAT));
+        let a = hex("00000001000000010000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000003ff00000000000003ff0000000000000");
+        let acc = Acceleration::decode(&a).unwrap();
+        assert_eq!(acc, Acceleration::new(1, [0.0; 3], IDENTITY_QUAT, 1.0));
+        let mut out = [0u8; 72];
+        acc.encode(&mut out);
+        assert_eq!(&out[..], &a[..]);
     }
 }
