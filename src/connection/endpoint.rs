@@ -216,6 +216,8 @@ pub(crate) struct Endpoint {
     pub(crate) peer: String,
     /// Version text of the peer's cookie once read.
     pub(crate) peer_version: Option<String>,
+    /// The peer broke the protocol; the I/O layer drops it.
+    pub(crate) protocol_error: bool,
 }
 
 impl Endpoint {
@@ -234,6 +236,7 @@ impl Endpoint {
             seq_udp: 0,
             peer,
             peer_version: None,
+            protocol_error: false,
         }
     }
 

@@ -837,9 +837,9 @@ impl Core {
                             ) {
                                 return Some(d);
                             }
-                            if p.ep.phase == Phase::TcpConnecting {
-                                // handle_message asked for a drop via the phase flag.
-                                let reason = format!("protocol error from {}", p.ep.peer);
+                            if p.ep.protocol_error {
+                                let reason =
+                                    format!("dropped {} after a protocol error", p.ep.peer);
                                 self.drop_peer(i, reason, now);
                                 return self.queue.pop_front();
                             }
@@ -936,6 +936,11 @@ impl Core {
                     ) {
                         return Some(d);
                     }
+                    if p.ep.protocol_error {
+                        let reason = format!("dropped {} after a protocol error", p.ep.peer);
+                        self.drop_peer(i, reason, now);
+                        return self.queue.pop_front();
+                    }
                     if !self.queue.is_empty() || !self.to_describe.is_empty() {
                         return None;
                     }
@@ -980,7 +985,7 @@ impl Core {
                             severity: Severity::Error,
                             text: format!("bad description from {}: {e}", p.ep.peer),
                         }));
-                        p.ep.phase = Phase::TcpConnecting;
+                        p.ep.protocol_error = true;
                         return None;
                     }
                 };
@@ -996,7 +1001,7 @@ impl Core {
                             severity: Severity::Error,
                             text: format!("{} described a name we cannot hold: {e}", p.ep.peer),
                         }));
-                        p.ep.phase = Phase::TcpConnecting;
+                        p.ep.protocol_error = true;
                         return None;
                     }
                 };
@@ -1014,7 +1019,7 @@ impl Core {
                             p.ep.peer, h.sender
                         ),
                     }));
-                    p.ep.phase = Phase::TcpConnecting;
+                    p.ep.protocol_error = true;
                     return None;
                 }
                 if new {
