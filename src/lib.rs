@@ -2,6 +2,7 @@
 
 #![warn(missing_docs)]
 
+pub mod server;
 pub mod time;
 pub mod wire;
 
