@@ -1,7 +1,11 @@
-//! `vrpn_server`: command-line options and the server loop.
+//! The generic VRPN server (`vrpn_server`): configuration file, command-line options, the
+//! table from configuration keyword to device, and the server loop.
 
+pub mod config;
+pub mod factory;
 pub mod options;
 pub mod run;
 
+pub use factory::build_devices;
 pub use options::{parse_args, ServerOptions, SleepPolicy};
 pub use run::ServerLoop;

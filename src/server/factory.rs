@@ -1,0 +1,67 @@
+//! From `vrpn.cfg` entries to running devices: the table from keyword to constructor.
+
+use super::config::{DeviceConfig, DeviceEntry};
+use crate::connection::Connection;
+use crate::devices::tracker::{TrackerNull, TrackerSpin};
+use crate::devices::ServerDevice;
+
+/// Builds the devices `entries` describe on `conn`, in file order.
+///
+/// An entry that cannot be served (unknown keyword, a device not implemented yet, a constructor
+/// failure) is an error naming the file and line; with `warn_only` (`vrpn_server -warn`) it is
+/// printed and skipped instead, as C++ does.
+pub fn build_devices(
+    entries: &[DeviceEntry],
+    conn: &Connection,
+    warn_only: bool,
+    verbose: bool,
+) -> Result<Vec<Box<dyn ServerDevice>>, String> {
+    let mut devices: Vec<Box<dyn ServerDevice>> = Vec::new();
+    for entry in entries {
+        match build_one(entry, conn) {
+            Ok(dev) => {
+                if verbose {
+                    println!(
+                        "Opening {}: {} ({})",
+                        entry.keyword,
+                        dev.name(),
+                        entry.location
+                    );
+                }
+                devices.push(dev);
+            }
+            Err(e) if warn_only => eprintln!("vrpn_server: {e}, skipped"),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(devices)
+}
+
+fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Box<dyn ServerDevice>, String> {
+    let at = |e: crate::Error| format!("{}: {}: {e}", entry.location, entry.keyword);
+    match &entry.config {
+        DeviceConfig::TrackerNull(c) => Ok(Box::new(
+            TrackerNull::new(&c.name, conn, c.sensors as usize, c.rate as f64).map_err(at)?,
+        )),
+        DeviceConfig::TrackerSpin(c) => Ok(Box::new(
+            TrackerSpin::new(
+                &c.name,
+                conn,
+                c.sensors as usize,
+                c.rate as f64,
+                c.axis.map(f64::from),
+                c.spin_hz as f64,
+            )
+            .map_err(at)?,
+        )),
+        DeviceConfig::Unknown { .. } => Err(entry
+            .unknown_error()
+            .map(|e| e.to_string())
+            .unwrap_or_else(|| format!("{}: unknown device", entry.location))),
+        other => Err(format!(
+            "{}: {} is recognised but this vrpn_server cannot serve it yet",
+            entry.location,
+            other.keyword()
+        )),
+    }
+}
