@@ -1337,6 +1337,12 @@ fn unknown_message(keyword: &str) -> String {
              without BOM"
         );
     }
+    if KNOWN_KEYWORDS.contains(&keyword) {
+        return format!(
+            "{base}: a character other than a space or tab (such as a carriage return) follows \
+             the keyword; separate it from its arguments with spaces or tabs"
+        );
+    }
     if keyword == "vrpn_Tracker_IS900" {
         return format!(
             "{base}: VRPN has no such keyword; run an IS-900 with vrpn_Tracker_Fastrak NAME \
@@ -2483,9 +2489,15 @@ mod tests {
         let c = ctx();
         assert_eq!(int_in(&c, "n", "+5", 0, 9), Ok(5));
         let e = int_in(&c, "n", "2.5", 0, 9).unwrap_err();
-        assert_eq!(e.to_string(), "t.cfg:7: kw: n must be a whole number, found '2.5'");
+        assert_eq!(
+            e.to_string(),
+            "t.cfg:7: kw: n must be a whole number, found '2.5'"
+        );
         let e = int_in(&c, "n", "10", 0, 9).unwrap_err();
-        assert_eq!(e.to_string(), "t.cfg:7: kw: n must be between 0 and 9, found 10");
+        assert_eq!(
+            e.to_string(),
+            "t.cfg:7: kw: n must be between 0 and 9, found 10"
+        );
         assert_eq!(e.kind(), ConfigErrorKind::OutOfRange);
         let e = int_in(&c, "n", "99999999999999999999", 0, 9).unwrap_err();
         assert_eq!(e.kind(), ConfigErrorKind::OutOfRange);
@@ -2574,6 +2586,9 @@ mod tests {
         assert!(unknown_message("vrpn_Tracker_IS900").contains("IS900time"));
         assert!(unknown_message("\u{feff}vrpn_Tracker_NULL").contains("byte-order mark"));
         assert_eq!(unknown_message("vrpn_Foo"), "unknown device type vrpn_Foo");
+        assert!(unknown_message("vrpn_Joylin").contains("carriage return"));
+        let entries = parse_str("vrpn_Joylin\rJ0 /dev/input/js0\n", "x").unwrap();
+        assert!(entries[0].unknown_error().is_some());
     }
 
     #[test]
