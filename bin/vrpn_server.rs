@@ -75,7 +75,9 @@ fn main() {
         });
     }
     let port = conn.local_port().unwrap_or(opts.port);
-    let nic = opts.nic.map_or("all interfaces".to_string(), |n| n.to_string());
+    let nic = opts
+        .nic
+        .map_or("all interfaces".to_string(), |n| n.to_string());
     println!(
         "vrpn_server: serving {} device(s) from {} on port {port} ({nic})",
         devices.len(),
