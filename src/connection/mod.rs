@@ -24,7 +24,7 @@ use crate::dispatch::{
 };
 use crate::error::Error;
 use crate::name::{DeviceName, Location};
-use crate::net::{Core, Delivery, LocalEvent};
+use crate::net::{Core, Delivery};
 use crate::time::TimeVal;
 use crate::wire;
 
@@ -507,16 +507,10 @@ impl Connection {
                     self.inner.core.borrow_mut().scratch = scratch;
                 }
                 Delivery::Event(ev) => {
-                    let type_id = TypeId(match ev {
-                        LocalEvent::GotFirstConnection => 0,
-                        LocalEvent::GotConnection => 1,
-                        LocalEvent::DroppedConnection => 2,
-                        LocalEvent::DroppedLastConnection => 3,
-                    });
                     self.deliver(&Message {
                         time: TimeVal::now(),
                         sender: SenderId(0),
-                        type_id,
+                        type_id: ev.type_id(),
                         payload: &[],
                     });
                 }

@@ -14,7 +14,7 @@ use mio::{Events, Interest, Poll, Token};
 
 use crate::connection::endpoint::{Endpoint, Phase};
 use crate::connection::names::Names;
-use crate::connection::{ConnectionState, Limits, Notice, Severity};
+use crate::connection::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 use crate::error::Error;
 use crate::time::TimeVal;
 use crate::wire::{self, class, system, Cookie, COOKIE_LEN};
@@ -27,15 +27,6 @@ const PEER_BASE: usize = 16;
 const TOK_TCP: usize = 0;
 const TOK_UDP_IN: usize = 1;
 
-/// Local connection events, delivered as messages of types 0–3 from sender 0.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum LocalEvent {
-    GotFirstConnection = 0,
-    GotConnection = 1,
-    DroppedConnection = 2,
-    DroppedLastConnection = 3,
-}
-
 /// What the core hands to the dispatcher, in order.
 pub(crate) enum Delivery {
     /// A user message; its payload is in `Core::scratch[..len]`.
@@ -45,7 +36,7 @@ pub(crate) enum Delivery {
         type_id: i32,
         len: usize,
     },
-    Event(LocalEvent),
+    Event(ConnectionEvent),
     Notice(Notice),
     /// A sender name the peer described for the first time (local id).
     PeerSender(i32),
@@ -1173,11 +1164,11 @@ impl Core {
         self.flush_peer(i);
         if self.connected == 0 {
             self.queue
-                .push_back(Delivery::Event(LocalEvent::GotFirstConnection));
+                .push_back(Delivery::Event(ConnectionEvent::GotFirstConnection));
         }
         self.connected += 1;
         self.queue
-            .push_back(Delivery::Event(LocalEvent::GotConnection));
+            .push_back(Delivery::Event(ConnectionEvent::GotConnection));
     }
 
     /// Describes names that peers taught us to every connected peer (the C++ echo).
@@ -1349,10 +1340,10 @@ impl Core {
         if was_connected {
             self.connected -= 1;
             self.queue
-                .push_back(Delivery::Event(LocalEvent::DroppedConnection));
+                .push_back(Delivery::Event(ConnectionEvent::DroppedConnection));
             if self.connected == 0 {
                 self.queue
-                    .push_back(Delivery::Event(LocalEvent::DroppedLastConnection));
+                    .push_back(Delivery::Event(ConnectionEvent::DroppedLastConnection));
             }
         }
     }
