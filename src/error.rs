@@ -28,6 +28,8 @@ pub enum Error {
     NameLimit(NameLimit),
     /// A message payload is larger than a VRPN peer accepts.
     PayloadTooLarge(usize),
+    /// A log file cannot be written or read (file, offset and problem in the text).
+    Log(String),
     /// The operation needs a different kind of connection (e.g. a server socket on a client).
     Unsupported(&'static str),
 }
@@ -57,6 +59,7 @@ impl std::fmt::Display for Error {
                 "payload of {n} bytes exceeds the {} bytes a VRPN peer accepts",
                 crate::connection::MAX_PAYLOAD
             ),
+            Error::Log(text) => f.write_str(text),
             Error::Unsupported(what) => write!(f, "not supported: {what}"),
         }
     }

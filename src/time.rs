@@ -63,6 +63,18 @@ impl TimeVal {
         (self.as_micros() - earlier.as_micros()) as f64 * 1e-6
     }
 
+    /// Adds float seconds (rounded to the microsecond).
+    pub fn plus_secs(&self, secs: f64) -> TimeVal {
+        if !secs.is_finite() {
+            return if secs > 0.0 {
+                TimeVal::new(i64::MAX / 2_000_000, 0)
+            } else {
+                *self
+            };
+        }
+        TimeVal::from_micros(self.as_micros() + (secs * 1e6).round() as i64)
+    }
+
     /// Adds a duration.
     pub fn plus(&self, d: Duration) -> TimeVal {
         TimeVal::from_micros(self.as_micros() + d.as_micros() as i64)

@@ -151,6 +151,8 @@ thread_local! {
 }
 
 const DEFERRED_HEADER: usize = 4 + 4 + 8 + 8 + 4;
+/// Log bytes written per mainloop pass: bounded so logging never stalls the loop.
+const LOG_FLUSH_PER_PASS: usize = 256 * 1024;
 
 impl Connection {
     fn from_core(core: Core) -> Connection {
@@ -181,9 +183,19 @@ impl Connection {
     pub fn open_location(name: &DeviceName) -> Result<Connection, Error> {
         match &name.location {
             Location::Loopback => Ok(Connection::loopback()),
-            Location::File { .. } => Err(Error::Unsupported(
-                "file: replay connections (log replay lands with the logging issue)",
-            )),
+            Location::File { path } => {
+                let key = name.location_text.clone();
+                if let Some(inner) = SHARED.with(|s| s.borrow().get(&key).and_then(Weak::upgrade)) {
+                    return Ok(Connection { inner });
+                }
+                let conn = Connection::replay_file(path)?;
+                SHARED.with(|s| {
+                    let mut s = s.borrow_mut();
+                    s.retain(|_, w| w.strong_count() > 0);
+                    s.insert(key, Rc::downgrade(&conn.inner));
+                });
+                Ok(conn)
+            }
             Location::Net {
                 host,
                 port,
@@ -202,6 +214,14 @@ impl Connection {
                 Ok(conn)
             }
         }
+    }
+
+    /// A new, unshared replay of the log at `path` (what `Device@file:path` opens).
+    ///
+    /// Callbacks fire at the original pace with the original timestamps; see
+    /// [`Connection::replay`] for rate, reset, play-to and jump-to.
+    pub fn replay_file(path: &str) -> Result<Connection, Error> {
+        Ok(Connection::from_core(Core::file(path, Limits::default())?))
     }
 
     /// A new, unshared client connection to `host:port`.
@@ -461,8 +481,57 @@ impl Connection {
             core.begin_pass();
         }
         self.pump(now);
-        self.inner.core.borrow_mut().flush();
+        let mut core = self.inner.core.borrow_mut();
+        core.flush();
+        core.flush_logs_some(LOG_FLUSH_PER_PASS);
         Ok(())
+    }
+
+    // -------------------------------------------------------------- logging
+
+    /// Logs every message this side receives to a new file at `path` (C++ format; an
+    /// existing file is never overwritten). A client logs into one file across reconnects; a
+    /// server opens one file per client, `in.vrpn` → `in-1.vrpn`, `in-2.vrpn`, … (`-li`).
+    pub fn log_incoming(&self, path: &str) -> Result<(), Error> {
+        self.inner.core.borrow_mut().log_incoming(path)
+    }
+
+    /// Logs every message this side sends (descriptions included) to a new file at `path`
+    /// (`-lo`). A server logs from now on, clients connected or not.
+    pub fn log_outgoing(&self, path: &str) -> Result<(), Error> {
+        self.inner.core.borrow_mut().log_outgoing(path)
+    }
+
+    /// Writes all buffered log data now (`vrpn_server -flush` calls it every pass). Otherwise
+    /// each `mainloop()` writes a bounded amount and the rest goes out when the connection
+    /// closes.
+    pub fn flush_logs(&self) -> Result<(), Error> {
+        self.inner.core.borrow_mut().flush_logs_all()
+    }
+
+    /// Ends logging: writes the closing DISCONNECT entry of an outgoing log and flushes.
+    pub fn close_logs(&self) -> Result<(), Error> {
+        self.inner.core.borrow_mut().close_logs()
+    }
+
+    /// Replay controls, when this connection replays a log file.
+    pub fn replay(&self) -> Option<ReplayControl<'_>> {
+        self.inner
+            .core
+            .borrow_mut()
+            .replay_mut()
+            .is_some()
+            .then_some(ReplayControl { conn: self })
+    }
+
+    /// True when this connection replays a log file.
+    pub fn is_replay(&self) -> bool {
+        self.inner.core.borrow_mut().replay_mut().is_some()
+    }
+
+    fn with_replay<T>(&self, f: impl FnOnce(&mut crate::log::replay::Replay) -> T) -> T {
+        let mut core = self.inner.core.borrow_mut();
+        f(core.replay_mut().expect("a replay connection"))
     }
 
     /// Blocks until a socket of this connection is ready or `timeout` passes (or a client's
@@ -598,6 +667,100 @@ impl Connection {
     pub fn downgrade(&self) -> WeakConnection {
         WeakConnection {
             inner: Rc::downgrade(&self.inner),
+        }
+    }
+}
+
+/// Controls of a log replay (C++ `vrpn_File_Connection`), borrowed from its connection.
+pub struct ReplayControl<'a> {
+    conn: &'a Connection,
+}
+
+impl ReplayControl<'_> {
+    /// Sets the speed: 1.0 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as
+    /// fast as possible.
+    pub fn set_rate(&self, rate: f64) {
+        self.conn.with_replay(|r| r.set_rate(rate));
+    }
+
+    /// The speed factor.
+    pub fn rate(&self) -> f64 {
+        self.conn.with_replay(|r| r.rate())
+    }
+
+    /// Back to the start (handlers see a dropped-connection event, as in C++).
+    pub fn reset(&self) {
+        self.conn.with_replay(|r| r.reset());
+        self.conn.pump(Instant::now());
+    }
+
+    /// Plays, now, every message up to `secs` after the first one (rewinding first when that
+    /// is behind the current position).
+    pub fn play_to_time(&self, secs: f64) {
+        self.conn.with_replay(|r| r.play_to_time(secs));
+        self.conn.pump(Instant::now());
+    }
+
+    /// Plays the next message now, whatever its time. Returns false at the end of the file.
+    pub fn play_one(&self) -> bool {
+        if self.eof() {
+            return false;
+        }
+        self.conn.with_replay(|r| r.play_one());
+        self.conn.pump(Instant::now());
+        true
+    }
+
+    /// Moves to `secs` after the first message without delivering the messages in between
+    /// (descriptions on the way are still learned). Returns whether that time is in the log.
+    pub fn jump_to_time(&self, secs: f64) -> bool {
+        let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
+        self.conn.skip_due();
+        inside
+    }
+
+    /// True when every message has been played.
+    pub fn eof(&self) -> bool {
+        self.conn.with_replay(|r| r.eof())
+    }
+
+    /// Where the replay stands, on the log's own clock.
+    pub fn file_time(&self) -> TimeVal {
+        self.conn.with_replay(|r| r.file_time())
+    }
+
+    /// Seconds since the first message.
+    pub fn elapsed(&self) -> f64 {
+        self.conn.with_replay(|r| r.elapsed())
+    }
+
+    /// Time of the first user message.
+    pub fn first_time(&self) -> Option<TimeVal> {
+        self.conn.with_replay(|r| r.first_time())
+    }
+
+    /// Time of the last user message.
+    pub fn last_time(&self) -> Option<TimeVal> {
+        self.conn.with_replay(|r| r.last_time())
+    }
+
+    /// Seconds between the first and last user messages.
+    pub fn length_secs(&self) -> f64 {
+        self.conn.with_replay(|r| r.length_secs())
+    }
+}
+
+impl Connection {
+    /// Consumes due replay entries without delivering user messages (jump).
+    fn skip_due(&self) {
+        loop {
+            let d = self.inner.core.borrow_mut().next_delivery(Instant::now());
+            match d {
+                None => break,
+                Some(Delivery::Message { .. }) => {}
+                Some(Delivery::Notice(n)) => self.inner.notices.call(&n),
+                Some(_) => {}
+            }
         }
     }
 }

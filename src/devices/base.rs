@@ -161,6 +161,9 @@ impl PingCycle {
 
     /// Runs the cycle: call once per remote mainloop.
     pub fn poll(&self, conn: &Connection) {
+        if conn.is_replay() {
+            return; // nobody answers pings in a log
+        }
         let now = Instant::now();
         let st = &self.state;
         if !st.started.get() || st.restart.replace(false) {

@@ -16,6 +16,8 @@ use crate::connection::endpoint::{Endpoint, Phase};
 use crate::connection::names::Names;
 use crate::connection::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 use crate::error::Error;
+use crate::log::replay::Replay;
+use crate::log::{log_cookie_from_peer, LogError, LogWriter};
 use crate::time::TimeVal;
 use crate::wire::{self, class, system, Cookie, COOKIE_LEN};
 
@@ -57,6 +59,8 @@ pub(crate) struct PeerIo {
 pub(crate) struct Peer {
     pub(crate) ep: Endpoint,
     io: PeerIo,
+    /// This peer's incoming log (`vrpn_server -li`: one file per client).
+    log_in: Option<LogWriter>,
 }
 
 /// Server-side listening sockets.
@@ -95,6 +99,14 @@ pub(crate) enum Kind {
     Loopback,
     Server(ServerNet),
     Client(Box<ClientNet>),
+    /// Replay of a log file: entries go through the same translation as a live peer's.
+    File(Box<FileNet>),
+}
+
+/// A log replay and the id tables of the session it recorded.
+pub(crate) struct FileNet {
+    pub(crate) replay: Replay,
+    ep: Endpoint,
 }
 
 /// Everything a connection owns except its handlers.
@@ -114,6 +126,13 @@ pub(crate) struct Core {
     budget: usize,
     /// Set whenever a socket showed activity; the server loop uses it for its busy-poll window.
     pub(crate) activity: bool,
+    /// Connection-wide incoming log (client connections).
+    log_in: Option<LogWriter>,
+    /// Outgoing log: everything this side packs (client, or `vrpn_server -lo`).
+    log_out: Option<LogWriter>,
+    /// `vrpn_server -li`: file name to which `-N` is added for the N-th client.
+    log_in_template: Option<(String, u32)>,
+    log_failed: bool,
 }
 
 fn would_block(e: &io::Error) -> bool {
@@ -169,6 +188,201 @@ impl Core {
             cursor: 0,
             budget: 0,
             activity: false,
+            log_in: None,
+            log_out: None,
+            log_in_template: None,
+            log_failed: false,
+        }
+    }
+
+    /// A replay of the log at `path`.
+    pub(crate) fn file(path: &str, limits: Limits) -> Result<Core, Error> {
+        let replay = Replay::open(path).map_err(|e| Error::Log(e.to_string()))?;
+        let net = FileNet {
+            replay,
+            ep: {
+                let mut ep = Endpoint::new(true, format!("file:{path}"), 0);
+                ep.phase = Phase::Connected;
+                ep
+            },
+        };
+        Ok(Core::with_kind(Kind::File(Box::new(net)), None, limits))
+    }
+
+    // ------------------------------------------------------------------ logging
+
+    /// Starts logging what this side receives. Clients: one file, across reconnects. Servers:
+    /// one file per accepted client, `-N` added before the extension.
+    pub(crate) fn log_incoming(&mut self, path: &str) -> Result<(), Error> {
+        match &self.kind {
+            Kind::Server(_) => {
+                self.log_in_template = Some((path.to_string(), 0));
+                Ok(())
+            }
+            _ => {
+                let w = LogWriter::create(path, &Cookie::ours(0).to_bytes())
+                    .map_err(|e| Error::Log(e.to_string()))?;
+                self.log_in = Some(w);
+                Ok(())
+            }
+        }
+    }
+
+    /// Starts logging everything this side packs, from now on.
+    pub(crate) fn log_outgoing(&mut self, path: &str) -> Result<(), Error> {
+        let w = LogWriter::create(path, &Cookie::ours(0).to_bytes())
+            .map_err(|e| Error::Log(e.to_string()))?;
+        self.log_out = Some(w);
+        Ok(())
+    }
+
+    fn open_peer_log(&mut self, slot: usize) {
+        let Some((template, n)) = self.log_in_template.as_mut() else {
+            return;
+        };
+        *n += 1;
+        let name = compound_log_name(template, *n);
+        match LogWriter::create(&name, &Cookie::ours(0).to_bytes()) {
+            Ok(w) => {
+                if let Some(Some(p)) = self.peers.get_mut(slot) {
+                    p.log_in = Some(w);
+                }
+            }
+            Err(e) => self.notice(Severity::Error, format!("cannot open incoming log: {e}")),
+        }
+    }
+
+    fn log_outgoing_message(&mut self, type_id: i32, sender: i32, time: TimeVal, payload: &[u8]) {
+        if let Some(w) = self.log_out.as_mut() {
+            if let Err(e) = w.log_message(type_id, sender, time, payload) {
+                self.log_error(e);
+            }
+        }
+    }
+
+    fn log_error(&mut self, e: LogError) {
+        if !self.log_failed {
+            self.log_failed = true;
+            self.notice(Severity::Error, format!("logging failed: {e}"));
+        }
+    }
+
+    /// Writes a bounded amount of buffered log data (called every pass; never stalls long).
+    pub(crate) fn flush_logs_some(&mut self, max_bytes: usize) {
+        let mut err = None;
+        for w in self.log_in.iter_mut().chain(self.log_out.iter_mut()).chain(
+            self.peers
+                .iter_mut()
+                .flatten()
+                .filter_map(|p| p.log_in.as_mut()),
+        ) {
+            if w.pending() > 0 {
+                if let Err(e) = w.flush_some(max_bytes) {
+                    err = Some(e);
+                }
+            }
+        }
+        if let Some(e) = err {
+            self.log_error(e);
+        }
+    }
+
+    /// Writes every buffered log byte.
+    pub(crate) fn flush_logs_all(&mut self) -> Result<(), Error> {
+        for w in self.log_in.iter_mut().chain(self.log_out.iter_mut()).chain(
+            self.peers
+                .iter_mut()
+                .flatten()
+                .filter_map(|p| p.log_in.as_mut()),
+        ) {
+            w.flush_all().map_err(|e| Error::Log(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Ends logging: a DISCONNECT entry closes the outgoing log (as C++ at shutdown).
+    pub(crate) fn close_logs(&mut self) -> Result<(), Error> {
+        if self.log_out.is_some() && !matches!(self.kind, Kind::Client(_)) || self.connected > 0 {
+            self.log_outgoing_message(system::DISCONNECT, 0, TimeVal::now(), &[]);
+        }
+        let r = self.flush_logs_all();
+        self.log_out = None;
+        self.log_in = None;
+        for p in self.peers.iter_mut().flatten() {
+            p.log_in = None;
+        }
+        r
+    }
+
+    // ------------------------------------------------------------------ replay
+
+    fn next_from_file(&mut self) -> Option<Delivery> {
+        loop {
+            let Kind::File(f) = &mut self.kind else {
+                return None;
+            };
+            if f.replay.take_reset() {
+                f.ep.clear_remote_names();
+                return Some(Delivery::Event(ConnectionEvent::DroppedConnection));
+            }
+            let Some(due) = f.replay.next_due() else {
+                if let Some(e) = f.replay.take_error() {
+                    let text = format!(
+                        "replay stopped at damaged data (every whole message before it was played): {e}"
+                    );
+                    return Some(Delivery::Notice(Notice {
+                        severity: Severity::Error,
+                        text,
+                    }));
+                }
+                return None;
+            };
+            let len = due.header.payload_len as usize;
+            let payload = &f.replay.bytes()[due.payload_at..due.payload_at + len];
+            self.scratch[..len].copy_from_slice(payload);
+            if let Some(w) = self.log_in.as_mut() {
+                // Re-log of a replay: original entry, playback wall-clock time (C++ §7.3).
+                let _ = w.log_message(
+                    due.header.type_id,
+                    due.header.sender,
+                    TimeVal::now(),
+                    &self.scratch[..len],
+                );
+            }
+            let h = wire::Header {
+                payload_len: len,
+                time: due.header.time(),
+                sender: due.header.sender,
+                type_id: due.header.type_id,
+                seq: 0,
+            };
+            if let Some(d) = Self::handle_message(
+                &mut self.names,
+                &mut self.to_describe,
+                &mut self.queue,
+                &mut f.ep,
+                None,
+                h,
+                &self.scratch[..len],
+                true,
+            ) {
+                return Some(d);
+            }
+            f.ep.protocol_error = false;
+            if !self.to_describe.is_empty() {
+                self.describe_new_names();
+            }
+            if let Some(d) = self.queue.pop_front() {
+                return Some(d);
+            }
+        }
+    }
+
+    /// The replay, for control calls.
+    pub(crate) fn replay_mut(&mut self) -> Option<&mut Replay> {
+        match &mut self.kind {
+            Kind::File(f) => Some(&mut f.replay),
+            _ => None,
         }
     }
 
@@ -261,7 +475,7 @@ impl Core {
 
     pub(crate) fn state(&self) -> ConnectionState {
         match &self.kind {
-            Kind::Loopback => ConnectionState::Connected,
+            Kind::Loopback | Kind::File(_) => ConnectionState::Connected,
             Kind::Server(_) => {
                 if self.connected > 0 {
                     ConnectionState::Connected
@@ -347,6 +561,9 @@ impl Core {
         }
         if matches!(self.kind, Kind::Client(_)) {
             self.client_service(now);
+        }
+        if let Kind::File(f) = &mut self.kind {
+            f.replay.tick(now);
         }
         for i in 0..self.peers.len() {
             self.complete_connect(i, now);
@@ -500,7 +717,9 @@ impl Core {
                 tcp_writable: true,
                 connect_deadline,
             },
+            log_in: None,
         });
+        self.open_peer_log(slot);
         slot
     }
 
@@ -762,6 +981,9 @@ impl Core {
                 self.describe_new_names();
                 continue;
             }
+            if matches!(self.kind, Kind::File(_)) {
+                return self.next_from_file();
+            }
             let n = self.peers.len();
             if n == 0 {
                 return None;
@@ -817,11 +1039,20 @@ impl Core {
                         Some(Ok((h, payload))) => {
                             let len = payload.len();
                             self.scratch[..len].copy_from_slice(payload);
+                            if let Some(w) = p.log_in.as_mut().or(self.log_in.as_mut()) {
+                                let _ = w.log_message(
+                                    h.type_id,
+                                    h.sender,
+                                    h.time,
+                                    &self.scratch[..len],
+                                );
+                            }
                             if let Some(d) = Self::handle_message(
                                 &mut self.names,
                                 &mut self.to_describe,
                                 &mut self.queue,
-                                p,
+                                &mut p.ep,
+                                Some(&mut p.io.udp_out),
                                 h,
                                 &self.scratch[..len],
                                 tcp_only,
@@ -916,11 +1147,15 @@ impl Core {
                     let p = self.peers[i].as_mut()?;
                     p.ep.udp_rx.pos += advance;
                     let tcp_only = p.ep.tcp_only;
+                    if let Some(w) = p.log_in.as_mut().or(self.log_in.as_mut()) {
+                        let _ = w.log_message(h.type_id, h.sender, h.time, &self.scratch[..len]);
+                    }
                     if let Some(d) = Self::handle_message(
                         &mut self.names,
                         &mut self.to_describe,
                         &mut self.queue,
-                        p,
+                        &mut p.ep,
+                        Some(&mut p.io.udp_out),
                         h,
                         &self.scratch[..len],
                         tcp_only,
@@ -961,7 +1196,8 @@ impl Core {
         names: &mut Names,
         to_describe: &mut Vec<(bool, i32)>,
         queue: &mut VecDeque<Delivery>,
-        p: &mut Peer,
+        ep: &mut Endpoint,
+        udp_out: Option<&mut Option<UdpSocket>>,
         h: wire::Header,
         payload: &[u8],
         tcp_only: bool,
@@ -974,9 +1210,9 @@ impl Core {
                     Err(e) => {
                         queue.push_back(Delivery::Notice(Notice {
                             severity: Severity::Error,
-                            text: format!("bad description from {}: {e}", p.ep.peer),
+                            text: format!("bad description from {}: {e}", ep.peer),
                         }));
-                        p.ep.protocol_error = true;
+                        ep.protocol_error = true;
                         return None;
                     }
                 };
@@ -990,16 +1226,16 @@ impl Core {
                     Err(e) => {
                         queue.push_back(Delivery::Notice(Notice {
                             severity: Severity::Error,
-                            text: format!("{} described a name we cannot hold: {e}", p.ep.peer),
+                            text: format!("{} described a name we cannot hold: {e}", ep.peer),
                         }));
-                        p.ep.protocol_error = true;
+                        ep.protocol_error = true;
                         return None;
                     }
                 };
                 let remote_table = if is_sender {
-                    &mut p.ep.remote_senders
+                    &mut ep.remote_senders
                 } else {
-                    &mut p.ep.remote_types
+                    &mut ep.remote_types
                 };
                 let was_known = Endpoint::lookup(remote_table, h.sender) == local;
                 if !Endpoint::map_remote(remote_table, h.sender, local) {
@@ -1007,10 +1243,10 @@ impl Core {
                         severity: Severity::Error,
                         text: format!(
                             "{} described id {} outside VRPN's 0..2000 range",
-                            p.ep.peer, h.sender
+                            ep.peer, h.sender
                         ),
                     }));
-                    p.ep.protocol_error = true;
+                    ep.protocol_error = true;
                     return None;
                 }
                 if new {
@@ -1022,10 +1258,14 @@ impl Core {
                 None
             }
             system::UDP_DESCRIPTION => {
-                if tcp_only || p.ep.udp_ready {
+                // Replayed logs carry UDP descriptions too; they open nothing.
+                let Some(udp_out) = udp_out else {
+                    return None;
+                };
+                if tcp_only || ep.udp_ready {
                     if !tcp_only {
                         // A repeated description (new port after the peer reconnected its UDP).
-                        p.ep.udp_ready = false;
+                        ep.udp_ready = false;
                     } else {
                         return None;
                     }
@@ -1050,23 +1290,23 @@ impl Core {
                     UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0)))
                         .and_then(|s| s.connect(target).map(|_| s));
                 if let Ok(s) = sock {
-                    p.io.udp_out = Some(s);
-                    p.ep.udp_ready = true;
+                    *udp_out = Some(s);
+                    ep.udp_ready = true;
                 }
                 None
             }
             system::LOG_DESCRIPTION => None,
             system::DISCONNECT => {
-                p.ep.clear_remote_names();
+                ep.clear_remote_names();
                 None
             }
             t if t < 0 => None,
             t => {
-                let local_type = Endpoint::lookup(&p.ep.remote_types, t);
+                let local_type = Endpoint::lookup(&ep.remote_types, t);
                 if local_type < 0 {
                     return None; // never described: ignored, as C++ does
                 }
-                let local_sender = Endpoint::lookup(&p.ep.remote_senders, h.sender);
+                let local_sender = Endpoint::lookup(&ep.remote_senders, h.sender);
                 Some(Delivery::Message {
                     time: h.time,
                     sender: local_sender,
@@ -1109,6 +1349,12 @@ impl Core {
         }
         p.ep.peer_version = Some(cookie.version());
         p.ep.phase = Phase::Connected;
+        // An incoming log carries the peer's cookie (LOGFILE.md §1.1).
+        let peer_cookie = log_cookie_from_peer(&cookie.to_bytes());
+        if let Some(w) = p.log_in.as_mut().or(self.log_in.as_mut()) {
+            w.set_cookie(&peer_cookie);
+        }
+        let log_handshake = matches!(self.kind, Kind::Client(_)) && self.log_out.is_some();
         // UDP inbound socket and its description, unless TCP-only.
         if !p.ep.tcp_only {
             let local_ip = match p.io.tcp.local_addr() {
@@ -1137,23 +1383,28 @@ impl Core {
                     &buf[..n],
                     class::RELIABLE,
                 );
+                if log_handshake {
+                    if let Some(w) = self.log_out.as_mut() {
+                        let _ = w.log_message(system::UDP_DESCRIPTION, port as i32, tv, &buf[..n]);
+                    }
+                }
             }
         }
         let mut buf = [0u8; 128];
-        for (id, name) in self.names.senders.iter() {
-            let n = system::encode_description(&mut buf, name);
-            let _ = p.ep.pack_always(
-                tv,
-                id,
-                system::SENDER_DESCRIPTION,
-                &buf[..n],
-                class::RELIABLE,
-            );
-        }
-        for (id, name) in self.names.types.iter() {
-            let n = system::encode_description(&mut buf, name);
-            let _ =
-                p.ep.pack_always(tv, id, system::TYPE_DESCRIPTION, &buf[..n], class::RELIABLE);
+        let tables = [
+            (system::SENDER_DESCRIPTION, &self.names.senders),
+            (system::TYPE_DESCRIPTION, &self.names.types),
+        ];
+        for (kind, table) in tables {
+            for (id, name) in table.iter() {
+                let n = system::encode_description(&mut buf, name);
+                let _ = p.ep.pack_always(tv, id, kind, &buf[..n], class::RELIABLE);
+                if log_handshake {
+                    if let Some(w) = self.log_out.as_mut() {
+                        let _ = w.log_message(kind, id, tv, &buf[..n]);
+                    }
+                }
+            }
         }
         if let Kind::Client(c) = &mut self.kind {
             c.ever_connected = true;
@@ -1202,6 +1453,7 @@ impl Core {
         for p in self.peers.iter_mut().flatten() {
             let _ = p.ep.pack(tv, id, t, &buf[..n], class::RELIABLE);
         }
+        self.log_outgoing_message(t, id, tv, &buf[..n]);
     }
 
     // ------------------------------------------------------------------ outgoing
@@ -1215,6 +1467,7 @@ impl Core {
         payload: &[u8],
         class_of_service: u32,
     ) {
+        self.log_outgoing_message(type_id, sender, time, payload);
         let mut overflow = None;
         for (i, p) in self.peers.iter_mut().enumerate() {
             if let Some(p) = p {
@@ -1326,6 +1579,9 @@ impl Core {
             c.next_attempt = now;
             c.waiting_since = now;
         }
+        if is_client && was_connected {
+            self.log_outgoing_message(system::DISCONNECT, 0, TimeVal::now(), &[]);
+        }
         let severity = if is_client {
             Severity::Warning
         } else {
@@ -1395,5 +1651,19 @@ impl Core {
             }
         }
         d
+    }
+}
+
+impl Drop for Core {
+    fn drop(&mut self) {
+        let _ = self.close_logs();
+    }
+}
+
+/// `in.vrpn` → `in-3.vrpn`: `-N` before the last `.` (appended when there is none), as C++.
+pub(crate) fn compound_log_name(template: &str, n: u32) -> String {
+    match template.rfind('.') {
+        Some(i) => format!("{}-{n}{}", &template[..i], &template[i..]),
+        None => format!("{template}-{n}"),
     }
 }

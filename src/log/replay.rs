@@ -1,0 +1,312 @@
+//! The clock and position of a log replay (LOGFILE.md §6), free of I/O and of dispatch.
+//!
+//! A [`Replay`] holds a preloaded log and decides which entry plays next; the connection core
+//! feeds each played entry through the same id-translation path as a live peer's message.
+//! The clock follows C++ `vrpn_File_Connection`: the first pass after open or reset only arms
+//! the wall clock; later passes accumulate `elapsed × rate` and play every entry whose time is
+//! at or before `file time + accumulated`, leaving the original timestamps untouched.
+
+use std::time::Instant;
+
+use super::format::{decode_entry, EntryHeader, ENTRY_HEADER_LEN};
+use super::reader::{LogError, LogReader};
+use crate::time::TimeVal;
+use crate::wire::COOKIE_LEN;
+
+/// What the next [`Replay::next_due`] call may play.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mode {
+    /// Nothing is due.
+    Idle,
+    /// The leading system entries (descriptions) at open and after a reset.
+    Leading,
+    /// Every entry with a time at or before the target, then file time = target.
+    Until(TimeVal),
+    /// Exactly the next entry, whatever its time.
+    One,
+}
+
+/// One entry to play: its header and where its payload lies in the file.
+#[derive(Clone, Copy, Debug)]
+pub struct DueEntry {
+    /// The entry's header (ids are the log's ids).
+    pub header: EntryHeader,
+    /// Offset of the payload in [`Replay::bytes`].
+    pub payload_at: usize,
+}
+
+/// Replay position, clock and controls over one preloaded log.
+#[derive(Debug)]
+pub struct Replay {
+    reader: LogReader,
+    next: usize,
+    file_time: TimeVal,
+    start_time: TimeVal,
+    accum: f64,
+    last_wall: Option<Instant>,
+    rate: f64,
+    mode: Mode,
+    eof: bool,
+    error: Option<LogError>,
+    error_taken: bool,
+    lowest: Option<TimeVal>,
+    highest: Option<TimeVal>,
+    /// Set by a reset: the connection reports it as a dropped-connection event.
+    reset_pending: bool,
+}
+
+impl Replay {
+    /// Opens `path` (read whole into memory) and scans it for its user-message time range.
+    pub fn open(path: &str) -> Result<Replay, LogError> {
+        Ok(Replay::from_reader(LogReader::open(path)?))
+    }
+
+    /// A replay of an already loaded log.
+    pub fn from_reader(reader: LogReader) -> Replay {
+        let mut lowest: Option<TimeVal> = None;
+        let mut highest: Option<TimeVal> = None;
+        let mut first_user = None;
+        for e in reader.entries().map_while(Result::ok) {
+            if e.type_id() >= 0 {
+                let t = e.time();
+                first_user.get_or_insert(t);
+                lowest = Some(lowest.map_or(t, |l| l.min(t)));
+                highest = Some(highest.map_or(t, |h| h.max(t)));
+            }
+        }
+        let first_time = reader
+            .entries()
+            .next()
+            .and_then(Result::ok)
+            .map(|e| e.time());
+        let start_time = first_user.or(first_time).unwrap_or(TimeVal::ZERO);
+        Replay {
+            reader,
+            next: COOKIE_LEN,
+            file_time: start_time,
+            start_time,
+            accum: 0.0,
+            last_wall: None,
+            rate: 1.0,
+            mode: Mode::Leading,
+            eof: false,
+            error: None,
+            error_taken: false,
+            lowest,
+            highest,
+            reset_pending: false,
+        }
+    }
+
+    /// The log's bytes (payloads of [`DueEntry`] point into them).
+    pub fn bytes(&self) -> &[u8] {
+        self.reader.bytes()
+    }
+
+    /// The cookie of the log.
+    pub fn cookie_bytes(&self) -> &[u8; COOKIE_LEN] {
+        self.reader.cookie_bytes()
+    }
+
+    /// Path of the log.
+    pub fn path(&self) -> &std::path::Path {
+        self.reader.path()
+    }
+
+    /// Advances the clock; call once per mainloop pass.
+    pub fn tick(&mut self, now: Instant) {
+        if self.mode == Mode::Leading {
+            return;
+        }
+        let Some(last) = self.last_wall.replace(now) else {
+            return; // first pass after open or reset: arm the clock, play nothing
+        };
+        self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+        let target = self.file_time.plus_secs(self.accum);
+        if self.peek_time().is_some_and(|t| t < target) {
+            self.accum = 0.0;
+            self.mode = Mode::Until(target);
+        }
+    }
+
+    fn peek_time(&self) -> Option<TimeVal> {
+        decode_entry(&self.reader.bytes()[self.next..], self.next)
+            .ok()
+            .map(|e| e.time())
+    }
+
+    /// The next entry that is due now, if any. Advances the position and the file time.
+    pub fn next_due(&mut self) -> Option<DueEntry> {
+        if self.eof || self.mode == Mode::Idle {
+            return None;
+        }
+        let bytes = self.reader.bytes();
+        if self.next >= bytes.len() {
+            self.finish_mode();
+            self.eof = true;
+            return None;
+        }
+        let entry = match decode_entry(&bytes[self.next..], self.next) {
+            Ok(e) => e,
+            Err(problem) => {
+                self.error = Some(LogError::BadEntry {
+                    path: self.reader.path().to_owned(),
+                    offset: self.next,
+                    problem,
+                });
+                self.finish_mode();
+                self.eof = true;
+                return None;
+            }
+        };
+        let due = match self.mode {
+            Mode::Idle => false,
+            Mode::Leading => entry.type_id() < 0,
+            Mode::Until(t) => entry.time() <= t,
+            Mode::One => true,
+        };
+        if !due {
+            self.finish_mode();
+            return None;
+        }
+        if self.mode == Mode::One {
+            self.mode = Mode::Idle;
+        }
+        let header = entry.header;
+        let payload_at = self.next + ENTRY_HEADER_LEN;
+        self.next = entry.end_offset();
+        self.file_time = header.time();
+        Some(DueEntry { header, payload_at })
+    }
+
+    fn finish_mode(&mut self) {
+        match self.mode {
+            Mode::Until(t) => self.file_time = t,
+            Mode::Leading => self.file_time = self.start_time,
+            _ => {}
+        }
+        self.mode = Mode::Idle;
+    }
+
+    /// The damage that ended the replay early, once (file, offset, problem).
+    pub fn take_error(&mut self) -> Option<&LogError> {
+        if self.error.is_some() && !self.error_taken {
+            self.error_taken = true;
+            self.error.as_ref()
+        } else {
+            None
+        }
+    }
+
+    /// True when every whole entry has been played.
+    pub fn eof(&self) -> bool {
+        self.eof
+    }
+
+    /// Sets the speed: 1 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as fast
+    /// as possible. Time so far is accumulated at the old rate.
+    pub fn set_rate(&mut self, rate: f64) {
+        if let Some(last) = self.last_wall {
+            let now = Instant::now();
+            self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+            self.last_wall = Some(now);
+        }
+        self.rate = if rate.is_nan() { 0.0 } else { rate.max(0.0) };
+    }
+
+    /// The speed factor.
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// Back to the start: leading descriptions replay on the next pass, the clock re-arms.
+    pub fn reset(&mut self) {
+        self.next = COOKIE_LEN;
+        self.file_time = self.start_time;
+        self.accum = 0.0;
+        self.last_wall = None;
+        self.mode = Mode::Leading;
+        self.eof = false;
+        self.reset_pending = true;
+    }
+
+    /// True once after each reset (the connection fires a dropped-connection event).
+    pub fn take_reset(&mut self) -> bool {
+        std::mem::take(&mut self.reset_pending)
+    }
+
+    /// Plays the leading system entries now (after open or reset).
+    pub fn play_leading(&mut self) {
+        if self.mode == Mode::Leading {
+            return;
+        }
+        self.mode = Mode::Leading;
+    }
+
+    /// Asks to play every entry up to `elapsed` seconds after the first message; rewinds first
+    /// when that is before the current file time.
+    pub fn play_to_time(&mut self, elapsed: f64) {
+        let target = self.base_time().plus_secs(elapsed);
+        if target < self.file_time {
+            self.reset();
+        }
+        self.last_wall = None;
+        self.mode = Mode::Until(target);
+    }
+
+    /// Asks to play exactly the next entry (stepping, or "as fast as the caller loops").
+    pub fn play_one(&mut self) {
+        self.mode = Mode::One;
+    }
+
+    /// Moves to `elapsed` seconds after the first message without delivering user messages;
+    /// the caller feeds the system entries passed over ([`Replay::skip_due`]) so descriptions
+    /// are not lost (C++ loses them). Returns whether the target lies within the log.
+    pub fn jump_to_time(&mut self, elapsed: f64) -> bool {
+        let target = self.base_time().plus_secs(elapsed);
+        if target < self.file_time || self.eof {
+            self.reset();
+            self.reset_pending = false;
+        }
+        self.mode = Mode::Until(target);
+        self.last_wall = None;
+        self.highest.is_some_and(|h| target <= h)
+    }
+
+    /// File time now: where the replay stands on the log's own time axis.
+    pub fn file_time(&self) -> TimeVal {
+        self.file_time
+    }
+
+    /// Seconds since the first message (the base of `play_to_time` and `jump_to_time`).
+    pub fn elapsed(&self) -> f64 {
+        self.file_time.seconds_since(self.base_time())
+    }
+
+    fn base_time(&self) -> TimeVal {
+        self.lowest.unwrap_or(self.start_time)
+    }
+
+    /// Time of the earliest user message.
+    pub fn first_time(&self) -> Option<TimeVal> {
+        self.lowest
+    }
+
+    /// Time of the latest user message.
+    pub fn last_time(&self) -> Option<TimeVal> {
+        self.highest
+    }
+
+    /// Seconds between the first and the last user message.
+    pub fn length_secs(&self) -> f64 {
+        match (self.lowest, self.highest) {
+            (Some(l), Some(h)) => h.seconds_since(l),
+            _ => 0.0,
+        }
+    }
+
+    /// True while entries remain due in this pass.
+    pub fn busy(&self) -> bool {
+        self.mode != Mode::Idle && !self.eof
+    }
+}
