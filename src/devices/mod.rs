@@ -3,8 +3,12 @@
 
 use std::time::Instant;
 
+pub mod analog;
 pub mod base;
+pub mod button;
+pub mod dial;
 pub mod text;
+pub mod text_device;
 pub mod tracker;
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest
