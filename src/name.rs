@@ -185,7 +185,7 @@ mod tests {
             net("Tracker0@tcp://host:3884"),
             ("Tracker0".into(), "host".into(), 3884, true)
         );
-        assert_eq!(net("Tracker0@tcp:host:3884").3, true);
+        assert!(net("Tracker0@tcp:host:3884").3);
         assert_eq!(net("Rigid Body 1@127.0.0.1").0, "Rigid Body 1");
         assert_eq!(net("a@b@host").1, "host");
         assert_eq!(

@@ -832,48 +832,6 @@ impl ServerDevice for TrackerNull {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn angular_velocity_from_rotation_over_dt() {
-        // 90° about z during 0.5 s is π rad/s about z.
-        let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2);
-        let v = TrackerVelocity {
-            time: TimeVal::ZERO,
-            sensor: 0,
-            vel: Vector3::zeros(),
-            vel_quat: q,
-            vel_quat_dt: 0.5,
-        };
-        let w = v.angular_velocity();
-        assert!((w - Vector3::new(0.0, 0.0, std::f64::consts::PI)).norm() < 1e-12);
-        // The same rotation written as −q gives the same rate.
-        let neg = UnitQuaternion::new_unchecked(-q.into_inner());
-        assert!((rotation_rate(&neg, 0.5) - w).norm() < 1e-12);
-        // Identity and dt = 0 give zero.
-        assert_eq!(
-            rotation_rate(&UnitQuaternion::identity(), 1.0),
-            Vector3::zeros()
-        );
-        assert_eq!(rotation_rate(&q, 0.0), Vector3::zeros());
-    }
-
-    #[test]
-    fn angular_acceleration_divides_by_dt_twice() {
-        let q = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.2);
-        let a = TrackerAcceleration {
-            time: TimeVal::ZERO,
-            sensor: 0,
-            acc: Vector3::zeros(),
-            acc_quat: q,
-            acc_quat_dt: 0.1,
-        };
-        assert!((a.angular_acceleration() - Vector3::new(20.0, 0.0, 0.0)).norm() < 1e-9);
-    }
-}
-
 /// `vrpn_Tracker_Spin NAME SENSORS RATE AX AY AZ SPIN_HZ`: every sensor spins about an axis.
 pub struct TrackerSpin {
     server: TrackerServer,
@@ -965,5 +923,47 @@ impl ServerDevice for TrackerSpin {
 
     fn next_deadline(&self) -> Option<Instant> {
         self.period.map(|_| self.next)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn angular_velocity_from_rotation_over_dt() {
+        // 90° about z during 0.5 s is π rad/s about z.
+        let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2);
+        let v = TrackerVelocity {
+            time: TimeVal::ZERO,
+            sensor: 0,
+            vel: Vector3::zeros(),
+            vel_quat: q,
+            vel_quat_dt: 0.5,
+        };
+        let w = v.angular_velocity();
+        assert!((w - Vector3::new(0.0, 0.0, std::f64::consts::PI)).norm() < 1e-12);
+        // The same rotation written as −q gives the same rate.
+        let neg = UnitQuaternion::new_unchecked(-q.into_inner());
+        assert!((rotation_rate(&neg, 0.5) - w).norm() < 1e-12);
+        // Identity and dt = 0 give zero.
+        assert_eq!(
+            rotation_rate(&UnitQuaternion::identity(), 1.0),
+            Vector3::zeros()
+        );
+        assert_eq!(rotation_rate(&q, 0.0), Vector3::zeros());
+    }
+
+    #[test]
+    fn angular_acceleration_divides_by_dt_twice() {
+        let q = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.2);
+        let a = TrackerAcceleration {
+            time: TimeVal::ZERO,
+            sensor: 0,
+            acc: Vector3::zeros(),
+            acc_quat: q,
+            acc_quat_dt: 0.1,
+        };
+        assert!((a.angular_acceleration() - Vector3::new(20.0, 0.0, 0.0)).norm() < 1e-9);
     }
 }

@@ -29,6 +29,7 @@ const TOK_UDP_IN: usize = 1;
 
 /// Local connection events, delivered as messages of types 0–3 from sender 0.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(clippy::enum_variant_names)]
 pub(crate) enum LocalEvent {
     GotFirstConnection = 0,
     GotConnection = 1,

@@ -81,10 +81,8 @@ impl ServerLoop {
                 timeout = timeout.min(deadline.saturating_duration_since(now));
             }
         }
-        if !timeout.is_zero() {
-            if self.conn.wait(timeout)? {
-                self.last_activity = Instant::now();
-            }
+        if !timeout.is_zero() && self.conn.wait(timeout)? {
+            self.last_activity = Instant::now();
         }
         Ok(())
     }
