@@ -4,9 +4,11 @@
 use std::time::Instant;
 
 pub mod analog;
+pub mod analog_output;
 pub mod base;
 pub mod button;
 pub mod dial;
+pub mod poser;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
