@@ -108,3 +108,73 @@ fn poser_requests_and_quirks() {
         [0.0, 0.0, 0.0, -1.0]
     );
 }
+
+#[test]
+fn force_device_round_trip_with_tracker_and_button_under_one_name() {
+    use vrpn::devices::force::{ForceDeviceRemote, ForceDeviceServer, ForceField, Plane};
+    use vrpn::{ButtonRemote, ButtonServer, TrackerRemote, TrackerServer};
+    let conn = Connection::new_loopback();
+    let tracker = TrackerServer::new("Phantom0", &conn, 1).unwrap();
+    let buttons = ButtonServer::new("Phantom0", &conn, 1).unwrap();
+    let force = ForceDeviceServer::new("Phantom0", &conn).unwrap();
+    let tr = TrackerRemote::on_connection("Phantom0", &conn).unwrap();
+    let br = ButtonRemote::on_connection("Phantom0", &conn).unwrap();
+    let fr = ForceDeviceRemote::on_connection("Phantom0", &conn).unwrap();
+    let forces = Rc::new(RefCell::new(Vec::new()));
+    let f = forces.clone();
+    fr.on_force(move |x| f.borrow_mut().push(x.force));
+    let scps = Rc::new(Cell::new(0));
+    let s = scps.clone();
+    fr.on_scp(move |x| {
+        assert_eq!(x.pos, [0.0, 0.1, 0.0]);
+        s.set(s.get() + 1)
+    });
+    let errs = Rc::new(Cell::new(-1));
+    let e = errs.clone();
+    fr.on_error(move |x| e.set(x.error_code));
+    let planes = Rc::new(RefCell::new(Vec::new()));
+    let p = planes.clone();
+    force.on_plane(move |(_, pl)| p.borrow_mut().push(*pl));
+    let fields = Rc::new(Cell::new(0.0f32));
+    let ff = fields.clone();
+    force.on_force_field(move |(_, fl)| ff.set(fl.radius));
+
+    let t = TimeVal { sec: 1, usec: 0 };
+    tracker
+        .report_pose(0, t, [0.0, 0.1, 0.0], [0.0, 0.0, 0.0, 1.0])
+        .unwrap();
+    buttons.set_button(0, true);
+    buttons.report_changes();
+    force.report_force(t, [1.0, -2.0, 0.5]).unwrap();
+    force
+        .report_scp(t, [0.0, 0.1, 0.0], [0.0, 0.0, 0.0, 1.0])
+        .unwrap();
+    force
+        .send_error(vrpn::wire::payload::force::FD_FORCE_ERROR)
+        .unwrap();
+    assert_eq!(tr.pose(0).unwrap().pos.y, 0.1);
+    assert!(br.pressed(0));
+    assert_eq!(*forces.borrow(), vec![[1.0, -2.0, 0.5]]);
+    assert_eq!(scps.get(), 1);
+    assert_eq!(errs.get(), 2);
+
+    let plane = Plane {
+        plane: [0.0, 1.0, 0.0, 0.0],
+        kspring: 0.8,
+        kdamp: 0.001,
+        fdyn: 0.3,
+        fstat: 0.7,
+        plane_index: 0,
+        recovery_cycles: 1,
+    };
+    fr.start_surface(&plane).unwrap();
+    assert_eq!(*planes.borrow(), vec![plane]);
+    let field = ForceField {
+        origin: [0.0; 3],
+        force: [0.0; 3],
+        jacobian: [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
+        radius: 100.0,
+    };
+    fr.send_force_field(&field).unwrap();
+    assert_eq!(fields.get(), 100.0);
+}

@@ -8,6 +8,7 @@ pub mod analog_output;
 pub mod base;
 pub mod button;
 pub mod dial;
+pub mod force;
 pub mod poser;
 pub mod text;
 pub mod text_device;
