@@ -8,7 +8,10 @@ use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use vrpn::{Connection, ConnectionState, DeviceName, TrackerRemote};
+use vrpn::{
+    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, TextReceiver,
+    TextSeverity, TrackerRemote,
+};
 
 const USAGE: &str = "usage: vrpn_print_devices [--json] [--seconds S] DEVICE@HOST[:PORT]...
        vrpn_print_devices --list HOST[:PORT]
@@ -244,9 +247,18 @@ fn main() {
                 );
                 p.set(p.get() + 1);
             });
-            println!("Opened {name} as: Tracker Text.");
         }
-        trackers.push(t);
+        let others = match open_others(name, json, &printed) {
+            Ok(o) => o,
+            Err(e) => {
+                eprintln!("vrpn_print_devices: {name}: {e}");
+                std::process::exit(2);
+            }
+        };
+        if !json {
+            println!("Opened {name} as: Tracker Button Analog Dial Text.");
+        }
+        trackers.push((t, others));
     }
     if !json {
         println!("Press ^C to exit.");
@@ -256,15 +268,131 @@ fn main() {
         if seconds.is_some_and(|s| start.elapsed().as_secs_f64() >= s) {
             break;
         }
-        for t in &trackers {
-            if let Err(e) = t.mainloop() {
+        for (t, o) in &trackers {
+            if let Err(e) = t
+                .mainloop()
+                .and_then(|_| o.0.mainloop())
+                .and_then(|_| o.1.mainloop())
+                .and_then(|_| o.2.mainloop())
+                .and_then(|_| o.3.mainloop())
+            {
                 eprintln!("vrpn_print_devices: {e}");
                 std::process::exit(1);
             }
         }
         // Sleep until data arrives (or 10 ms for ping timers and reconnect attempts).
-        if let Some(t) = trackers.first() {
+        if let Some((t, _)) = trackers.first() {
             let _ = t.connection().wait(Duration::from_millis(10));
         }
     }
+}
+
+type Others = (ButtonRemote, AnalogRemote, DialRemote, TextReceiver);
+
+/// Opens the Button, Analog, Dial and Text remotes of `name` and attaches the printers (the
+/// C++ formats, or JSON objects of kind button, button_states, analog, dial and text).
+fn open_others(name: &str, json: bool, printed: &Rc<Cell<u64>>) -> Result<Others, vrpn::Error> {
+    let b = ButtonRemote::new(name)?;
+    let a = AnalogRemote::new(name)?;
+    let d = DialRemote::new(name)?;
+    let t = TextReceiver::new(name)?;
+    let device = b.device().to_string();
+    let label = name.to_string();
+    let (dv, p) = (device.clone(), printed.clone());
+    let l = label.clone();
+    b.on_change(move |c| {
+        if json {
+            let mut s = head(&dv, "button", c.time);
+            let _ = write!(s, ",\"button\":{},\"state\":{}}}", c.button, c.state);
+            println!("{s}");
+        } else {
+            let what = if c.state != 0 { "pressed" } else { "released" };
+            println!(
+                "##########################################\nButton {l}, number {} was just {what}\n##########################################",
+                c.button
+            );
+        }
+        p.set(p.get() + 1);
+    });
+    let (dv, p) = (device.clone(), printed.clone());
+    let l = label.clone();
+    b.on_states(move |st| {
+        if json {
+            let mut s = head(&dv, "button_states", st.time);
+            s.push_str(",\"states\":[");
+            for (i, v) in st.as_slice().iter().enumerate() {
+                if i > 0 {
+                    s.push(',');
+                }
+                let _ = write!(s, "{v}");
+            }
+            s.push_str("]}");
+            println!("{s}");
+        } else {
+            let mut s = format!("Button {l} has {} buttons with states:", st.num_buttons);
+            for v in st.as_slice() {
+                let _ = write!(s, " {v}");
+            }
+            println!("{s}");
+        }
+        p.set(p.get() + 1);
+    });
+    let (dv, p) = (device.clone(), printed.clone());
+    let l = label.clone();
+    a.on_report(move |r| {
+        if json {
+            let mut s = head(&dv, "analog", r.time);
+            s.push_str(",\"channels\":");
+            arr(&mut s, r.channels());
+            s.push('}');
+            println!("{s}");
+        } else {
+            let mut s = format!("Analog {l}:\n         ");
+            for (i, v) in r.channels().iter().enumerate() {
+                if i > 0 {
+                    s.push_str(", ");
+                }
+                let _ = write!(s, "{v:5.2}");
+            }
+            let _ = write!(s, " ({} chans)", r.num_channel);
+            println!("{s}");
+        }
+        p.set(p.get() + 1);
+    });
+    let (dv, p) = (device.clone(), printed.clone());
+    let l = label.clone();
+    d.on_update(move |u| {
+        if json {
+            let mut s = head(&dv, "dial", u.time);
+            let _ = write!(s, ",\"dial\":{},\"change\":", u.dial);
+            num(&mut s, u.change);
+            s.push('}');
+            println!("{s}");
+        } else {
+            println!("Dial {l}, number {} was moved by {:5.2}", u.dial, u.change);
+        }
+        p.set(p.get() + 1);
+    });
+    let (dv, p) = (device, printed.clone());
+    let l = label;
+    t.on_message(move |m| {
+        if json {
+            let mut s = head(&dv, "text", m.time);
+            let sev = match m.severity {
+                TextSeverity::Normal => "normal",
+                TextSeverity::Warning => "warning",
+                TextSeverity::Error => "error",
+                TextSeverity::Other(_) => "other",
+            };
+            let _ = write!(s, ",\"severity\":\"{sev}\",\"level\":{},\"text\":", m.level);
+            json_str(&mut s, m.text());
+            s.push('}');
+            println!("{s}");
+        } else if m.severity == TextSeverity::Normal {
+            // Warnings and errors are printed by the default text printer.
+            println!("{l}: Text message: {}", m.text());
+        }
+        p.set(p.get() + 1);
+    });
+    Ok((b, a, d, t))
 }

@@ -46,7 +46,11 @@ pub mod time;
 pub mod wire;
 
 pub use connection::{Connection, ConnectionEvent, ConnectionState, Limits, Notice, Severity};
+pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
+pub use devices::button::{ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonStates};
+pub use devices::dial::{DialExample, DialRemote, DialServer, DialUpdate};
 pub use devices::text::TextSeverity;
+pub use devices::text_device::{TextExample, TextMessage, TextReceiver, TextSender};
 pub use devices::tracker::{
     TrackerAcceleration, TrackerNull, TrackerPose, TrackerRemote, TrackerServer, TrackerVelocity,
 };

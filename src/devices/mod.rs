@@ -3,8 +3,15 @@
 
 use std::time::Instant;
 
+pub mod analog;
+pub mod analog_output;
 pub mod base;
+pub mod button;
+pub mod dial;
+pub mod force;
+pub mod poser;
 pub mod text;
+pub mod text_device;
 pub mod tracker;
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest

@@ -2,6 +2,10 @@
 
 use super::config::{DeviceConfig, DeviceEntry};
 use crate::connection::Connection;
+use crate::devices::analog::AnalogExample;
+use crate::devices::button::ButtonExample;
+use crate::devices::dial::DialExample;
+use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
 
@@ -53,6 +57,25 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Box<dyn ServerDev
                 c.spin_hz as f64,
             )
             .map_err(at)?,
+        )),
+        DeviceConfig::ButtonExample(c) => Ok(Box::new(
+            ButtonExample::new(&c.name, conn, c.buttons as usize, c.rate as f64).map_err(at)?,
+        )),
+        DeviceConfig::DialExample(c) => Ok(Box::new(
+            DialExample::new(
+                &c.name,
+                conn,
+                c.dials as usize,
+                c.spin_rate as f64,
+                c.update_rate as f64,
+            )
+            .map_err(at)?,
+        )),
+        DeviceConfig::AnalogExample(c) => Ok(Box::new(
+            AnalogExample::new(&c.name, conn, c.channels as usize, c.rate as f64).map_err(at)?,
+        )),
+        DeviceConfig::TextExample(c) => Ok(Box::new(
+            TextExample::new(&c.name, conn, c.period as f64, &c.message).map_err(at)?,
         )),
         DeviceConfig::Unknown { .. } => Err(entry
             .unknown_error()

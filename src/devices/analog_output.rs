@@ -1,0 +1,311 @@
+//! Analog output (DEVICES.md §5): clients ask the server to set output channels; the server
+//! announces its channel count on every new connection. [`AnalogOutputRemote`] is the client
+//! half, [`AnalogOutputServer`] the server half (with the callbacks of C++
+//! `vrpn_Analog_Output_Callback_Server`).
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
+use super::base::{self, BaseIds, PingCycle};
+use super::text::TextSeverity;
+use crate::connection::{Connection, ConnectionEvent};
+use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::error::Error;
+use crate::name::DeviceName;
+use crate::time::TimeVal;
+use crate::wire::class;
+use crate::wire::payload::analog::CHANNEL_MAX;
+use crate::wire::payload::analog_output as codec;
+
+/// Ids of the analog output types on one connection.
+#[derive(Clone, Copy, Debug)]
+pub struct AnalogOutputIds {
+    /// Set one channel.
+    pub change_request: TypeId,
+    /// Set channels `0..n`.
+    pub change_channels_request: TypeId,
+    /// Number of channels (server->client).
+    pub num_channels_report: TypeId,
+}
+
+impl AnalogOutputIds {
+    /// Registers the three types in C++ order.
+    pub fn register(conn: &Connection) -> Result<AnalogOutputIds, Error> {
+        Ok(AnalogOutputIds {
+            change_request: conn.register_type(codec::CHANGE_REQUEST)?,
+            change_channels_request: conn.register_type(codec::CHANGE_CHANNELS_REQUEST)?,
+            num_channels_report: conn.register_type(codec::NUM_CHANNELS_REPORT)?,
+        })
+    }
+}
+
+/// The server's output values after a request (C++ `vrpn_ANALOGOUTPUTCB`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalogOutputValues {
+    /// Time of the request.
+    pub time: TimeVal,
+    /// Number of active output channels.
+    pub num_channel: i32,
+    /// Current values; channels `0..num_channel` are meaningful.
+    pub channel: [f64; CHANNEL_MAX],
+}
+
+impl AnalogOutputValues {
+    /// Values of the active channels.
+    pub fn channels(&self) -> &[f64] {
+        &self.channel[..(self.num_channel.clamp(0, CHANNEL_MAX as i32) as usize)]
+    }
+}
+
+/// Client half: sends channel requests, learns the server's channel count.
+pub struct AnalogOutputRemote {
+    conn: Connection,
+    ids: AnalogOutputIds,
+    base: BaseIds,
+    ping: PingCycle,
+    num: Rc<Cell<i32>>,
+    reports: Rc<CallbackList<i32>>,
+    handlers: Vec<HandlerId>,
+}
+
+impl AnalogOutputRemote {
+    /// Opens `Device@location`.
+    pub fn new(name: &str) -> Result<AnalogOutputRemote, Error> {
+        let parsed = DeviceName::parse(name)?;
+        let conn = Connection::open_location(&parsed)?;
+        Self::on_connection(&parsed.device, &conn)
+    }
+
+    /// A remote for `device` on an existing connection.
+    pub fn on_connection(device: &str, conn: &Connection) -> Result<AnalogOutputRemote, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let ids = AnalogOutputIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::attach_default_printer(conn, &base);
+        let ping = PingCycle::new(conn, base);
+        let num = Rc::new(Cell::new(CHANNEL_MAX as i32));
+        let reports: Rc<CallbackList<i32>> = Rc::new(CallbackList::default());
+        let (n, r) = (num.clone(), reports.clone());
+        let h = conn.register_handler(
+            ids.num_channels_report,
+            SenderFilter::Only(sender),
+            move |m| {
+                if let Ok(rep) = codec::NumChannelsReport::decode(m.payload) {
+                    if (0..=CHANNEL_MAX as i32).contains(&rep.num_channels) {
+                        n.set(rep.num_channels);
+                        r.call(&rep.num_channels);
+                    }
+                }
+            },
+        );
+        Ok(AnalogOutputRemote {
+            conn: conn.clone(),
+            ids,
+            base,
+            ping,
+            num,
+            reports,
+            handlers: vec![h],
+        })
+    }
+
+    /// Services the connection and the ping cycle.
+    pub fn mainloop(&self) -> Result<(), Error> {
+        self.conn.mainloop()?;
+        self.ping.poll(&self.conn);
+        Ok(())
+    }
+
+    /// The server's channel count (128 until it reports).
+    pub fn num_channels(&self) -> i32 {
+        self.num.get()
+    }
+
+    /// Calls `f` with each channel count the server reports.
+    pub fn on_num_channels(&self, f: impl FnMut(&i32) + 'static) -> HandlerId {
+        self.reports.add(f)
+    }
+
+    /// Asks the server to set one channel (RELIABLE).
+    pub fn request_change_channel_value(&self, channel: i32, value: f64) -> Result<(), Error> {
+        let mut buf = [0u8; codec::ChangeRequest::LEN];
+        codec::ChangeRequest::new(channel, value).encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.change_request,
+            self.base.sender,
+            &buf,
+            class::RELIABLE,
+        )
+    }
+
+    /// Asks the server to set channels `0..values.len()` (at most 128, RELIABLE).
+    pub fn request_change_channels(&self, values: &[f64]) -> Result<(), Error> {
+        if values.len() > CHANNEL_MAX {
+            return Err(Error::Unsupported("more than 128 analog output channels"));
+        }
+        let req = codec::ChangeChannelsRequest::from_slice(values);
+        let mut buf = [0u8; 8 + 8 * CHANNEL_MAX];
+        let len = req.encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.change_channels_request,
+            self.base.sender,
+            &buf[..len],
+            class::RELIABLE,
+        )
+    }
+
+    /// The connection this remote uses.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+}
+
+impl Drop for AnalogOutputRemote {
+    fn drop(&mut self) {
+        for h in self.handlers.drain(..) {
+            self.conn.remove_handler(h);
+        }
+    }
+}
+
+struct ServerShared {
+    values: RefCell<AnalogOutputValues>,
+    callbacks: CallbackList<AnalogOutputValues>,
+}
+
+/// Server half: stores requested values and calls back after every request.
+pub struct AnalogOutputServer {
+    conn: Connection,
+    ids: AnalogOutputIds,
+    base: BaseIds,
+    shared: Rc<ServerShared>,
+}
+
+impl AnalogOutputServer {
+    /// Registers `device` with `channels` output channels (clamped to 128).
+    pub fn new(
+        device: &str,
+        conn: &Connection,
+        channels: usize,
+    ) -> Result<AnalogOutputServer, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let ids = AnalogOutputIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::serve_pings(conn, &base);
+        let num = channels.min(CHANNEL_MAX) as i32;
+        let shared = Rc::new(ServerShared {
+            values: RefCell::new(AnalogOutputValues {
+                time: TimeVal::ZERO,
+                num_channel: num,
+                channel: [0.0; CHANNEL_MAX],
+            }),
+            callbacks: CallbackList::default(),
+        });
+        let weak = conn.downgrade();
+        conn.on_event(ConnectionEvent::GotConnection, move || {
+            if let Some(c) = weak.upgrade() {
+                let mut buf = [0u8; codec::NumChannelsReport::LEN];
+                codec::NumChannelsReport { num_channels: num }.encode(&mut buf);
+                let _ = c.pack_message(
+                    TimeVal::now(),
+                    ids.num_channels_report,
+                    sender,
+                    &buf,
+                    class::RELIABLE,
+                );
+            }
+        });
+        let only = SenderFilter::Only(sender);
+        let (weak, s) = (conn.downgrade(), shared.clone());
+        conn.register_handler(ids.change_request, only, move |m| {
+            let Ok(r) = codec::ChangeRequest::decode(m.payload) else {
+                return;
+            };
+            let v = {
+                let mut v = s.values.borrow_mut();
+                v.time = m.time;
+                if r.channel >= 0 && r.channel < v.num_channel {
+                    v.channel[r.channel as usize] = r.value;
+                } else if let Some(c) = weak.upgrade() {
+                    let t = format!(
+                        "Error:  (handle_request_message):  channel {} is not active.  Squelching.",
+                        r.channel
+                    );
+                    let _ = base::send_text(&c, sender, TextSeverity::Error, 0, &t);
+                }
+                *v
+            };
+            s.callbacks.call(&v);
+        });
+        let (weak, s) = (conn.downgrade(), shared.clone());
+        conn.register_handler(ids.change_channels_request, only, move |m| {
+            let raw_n = if m.payload.len() >= 4 {
+                i32::from_be_bytes([m.payload[0], m.payload[1], m.payload[2], m.payload[3]])
+            } else {
+                return;
+            };
+            let v = {
+                let mut v = s.values.borrow_mut();
+                v.time = m.time;
+                let num = v.num_channel;
+                if raw_n < 0 {
+                    if let Some(c) = weak.upgrade() {
+                        let t = format!(
+                            "Error:  (handle_request_channels_message):  invalid channel {raw_n}.  Squelching."
+                        );
+                        let _ = base::send_text(&c, sender, TextSeverity::Error, 0, &t);
+                    }
+                } else {
+                    if raw_n > num {
+                        if let Some(c) = weak.upgrade() {
+                            let t = format!(
+                                "Error:  (handle_request_channels_message):  channels above {num} not active; bad request up to channel {raw_n}.  Squelching."
+                            );
+                            let _ = base::send_text(&c, sender, TextSeverity::Error, 0, &t);
+                        }
+                    }
+                    if let Ok(r) = codec::ChangeChannelsRequest::decode(m.payload) {
+                        let n = r.count.min(num as usize);
+                        v.channel[..n].copy_from_slice(&r.values[..n]);
+                    }
+                }
+                *v
+            };
+            s.callbacks.call(&v);
+        });
+        Ok(AnalogOutputServer {
+            conn: conn.clone(),
+            ids,
+            base,
+            shared,
+        })
+    }
+
+    /// Calls `f` after every request (valid or not) with all current values.
+    pub fn on_request(&self, f: impl FnMut(&AnalogOutputValues) + 'static) -> HandlerId {
+        self.shared.callbacks.add(f)
+    }
+
+    /// The current output values.
+    pub fn values(&self) -> AnalogOutputValues {
+        *self.shared.values.borrow()
+    }
+
+    /// Sends the channel count now (as on a new connection).
+    pub fn report_num_channels(&self) -> Result<(), Error> {
+        let mut buf = [0u8; codec::NumChannelsReport::LEN];
+        codec::NumChannelsReport {
+            num_channels: self.shared.values.borrow().num_channel,
+        }
+        .encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.num_channels_report,
+            self.base.sender,
+            &buf,
+            class::RELIABLE,
+        )
+    }
+}

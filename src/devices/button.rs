@@ -1,0 +1,638 @@
+//! Button (DEVICES.md §3): edges (`Change`), the full state vector (`States`), mode requests
+//! (`Admin`) and toggle alerts. [`ButtonRemote`] is the client half, [`ButtonServer`] the
+//! server half (C++ `vrpn_Button_Filter` semantics), [`ButtonExample`] the example server.
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use super::base::{self, BaseIds, PingCycle};
+use super::text::TextSeverity;
+use super::ServerDevice;
+use crate::connection::{Connection, ConnectionEvent};
+use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::error::Error;
+use crate::name::DeviceName;
+use crate::time::TimeVal;
+use crate::wire::class;
+use crate::wire::payload::button as codec;
+
+pub use codec::{ALL_ID, MAX_BUTTONS, MOMENTARY, OFF, ON, TOGGLE_OFF, TOGGLE_ON};
+
+/// Ids of the button types on one connection.
+#[derive(Clone, Copy, Debug)]
+pub struct ButtonIds {
+    /// `vrpn_Button Change`.
+    pub change: TypeId,
+    /// `vrpn_Button States`.
+    pub states: TypeId,
+    /// `vrpn_Button Admin`.
+    pub admin: TypeId,
+}
+
+impl ButtonIds {
+    /// Registers the three button types in C++ order.
+    pub fn register(conn: &Connection) -> Result<ButtonIds, Error> {
+        Ok(ButtonIds {
+            change: conn.register_type(codec::CHANGE)?,
+            states: conn.register_type(codec::STATES)?,
+            admin: conn.register_type(codec::ADMIN)?,
+        })
+    }
+}
+
+/// One button changed (C++ `vrpn_BUTTONCB`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ButtonChange {
+    /// Time the server stamped on the report.
+    pub time: TimeVal,
+    /// Button index.
+    pub button: i32,
+    /// New state: [`OFF`] (0) or [`ON`] (1).
+    pub state: i32,
+}
+
+/// The state of every button (C++ `vrpn_BUTTONSTATESCB`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ButtonStates {
+    /// Time the server stamped on the report.
+    pub time: TimeVal,
+    /// Number of buttons.
+    pub num_buttons: i32,
+    /// States of buttons `0..num_buttons`; the rest is zero.
+    pub states: [i32; MAX_BUTTONS],
+}
+
+impl ButtonStates {
+    /// The states of buttons `0..num_buttons`.
+    pub fn as_slice(&self) -> &[i32] {
+        &self.states[..(self.num_buttons.clamp(0, MAX_BUTTONS as i32) as usize)]
+    }
+}
+
+struct RemoteShared {
+    change: CallbackList<ButtonChange>,
+    states_cb: CallbackList<ButtonStates>,
+    /// Latest state of every button (from Change and States).
+    states: RefCell<[i32; MAX_BUTTONS]>,
+    num_buttons: Cell<i32>,
+    got_states: Cell<bool>,
+    bad_messages: Cell<u64>,
+}
+
+/// Client half of a button device: callbacks and the latest state of every button.
+pub struct ButtonRemote {
+    conn: Connection,
+    ids: ButtonIds,
+    base: BaseIds,
+    ping: PingCycle,
+    shared: Rc<RemoteShared>,
+    device: String,
+    handlers: Vec<HandlerId>,
+}
+
+impl ButtonRemote {
+    /// Opens `Device@location` (sharing the connection with other devices at that location).
+    pub fn new(name: &str) -> Result<ButtonRemote, Error> {
+        let parsed = DeviceName::parse(name)?;
+        let conn = Connection::open_location(&parsed)?;
+        Self::on_connection(&parsed.device, &conn)
+    }
+
+    /// A remote for `device` on an existing connection.
+    pub fn on_connection(device: &str, conn: &Connection) -> Result<ButtonRemote, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let ids = ButtonIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::attach_default_printer(conn, &base);
+        let ping = PingCycle::new(conn, base);
+        let shared = Rc::new(RemoteShared {
+            change: CallbackList::default(),
+            states_cb: CallbackList::default(),
+            states: RefCell::new([0; MAX_BUTTONS]),
+            num_buttons: Cell::new(MAX_BUTTONS as i32),
+            got_states: Cell::new(false),
+            bad_messages: Cell::new(0),
+        });
+        let only = SenderFilter::Only(sender);
+        let mut handlers = Vec::new();
+        let s = shared.clone();
+        handlers.push(conn.register_handler(
+            ids.change,
+            only,
+            move |m| match codec::Change::decode(m.payload) {
+                Ok(c) => {
+                    if let Ok(i) = usize::try_from(c.button) {
+                        if i < MAX_BUTTONS {
+                            s.states.borrow_mut()[i] = c.state;
+                        }
+                    }
+                    s.change.call(&ButtonChange {
+                        time: m.time,
+                        button: c.button,
+                        state: c.state,
+                    });
+                }
+                Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
+            },
+        ));
+        let s = shared.clone();
+        handlers.push(conn.register_handler(
+            ids.states,
+            only,
+            move |m| match codec::States::decode(m.payload) {
+                Ok(st) => {
+                    s.num_buttons.set(st.count as i32);
+                    s.got_states.set(true);
+                    {
+                        let mut cur = s.states.borrow_mut();
+                        cur[..st.count].copy_from_slice(st.as_slice());
+                    }
+                    s.states_cb.call(&ButtonStates {
+                        time: m.time,
+                        num_buttons: st.count as i32,
+                        states: st.states,
+                    });
+                }
+                Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
+            },
+        ));
+        Ok(ButtonRemote {
+            conn: conn.clone(),
+            ids,
+            base,
+            ping,
+            shared,
+            device: device.to_string(),
+            handlers,
+        })
+    }
+
+    /// Services the connection (all devices on it) and this device's ping cycle.
+    pub fn mainloop(&self) -> Result<(), Error> {
+        self.conn.mainloop()?;
+        self.ping.poll(&self.conn);
+        Ok(())
+    }
+
+    /// The connection this remote uses.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+
+    /// The device (sender) name.
+    pub fn device(&self) -> &str {
+        &self.device
+    }
+
+    /// Calls `f` for every Change report.
+    pub fn on_change(&self, f: impl FnMut(&ButtonChange) + 'static) -> HandlerId {
+        self.shared.change.add(f)
+    }
+
+    /// Calls `f` for every States report.
+    pub fn on_states(&self, f: impl FnMut(&ButtonStates) + 'static) -> HandlerId {
+        self.shared.states_cb.add(f)
+    }
+
+    /// Removes a callback added with [`on_change`](Self::on_change) or
+    /// [`on_states`](Self::on_states).
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        self.shared.change.remove(id) || self.shared.states_cb.remove(id)
+    }
+
+    /// Latest state of button `i` (0 until a report says otherwise).
+    pub fn state(&self, i: usize) -> i32 {
+        self.shared.states.borrow().get(i).copied().unwrap_or(0)
+    }
+
+    /// True when button `i` is pressed.
+    pub fn pressed(&self, i: usize) -> bool {
+        self.state(i) != 0
+    }
+
+    /// Number of buttons: 256 until a States report gives the real count (as C++).
+    pub fn num_buttons(&self) -> i32 {
+        self.shared.num_buttons.get()
+    }
+
+    /// True once a States report arrived.
+    pub fn got_states(&self) -> bool {
+        self.shared.got_states.get()
+    }
+
+    /// Reports that could not be decoded and were ignored.
+    pub fn bad_messages(&self) -> u64 {
+        self.shared.bad_messages.get()
+    }
+
+    fn admin(&self, button: i32, mode: i32) -> Result<(), Error> {
+        let mut buf = [0u8; codec::Admin::LEN];
+        codec::Admin { button, mode }.encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.admin,
+            self.base.sender,
+            &buf,
+            class::RELIABLE,
+        )
+    }
+
+    fn check(&self, button: i32, what: &str) -> Result<(), Error> {
+        if button < 0 || button >= self.num_buttons() {
+            let text = format!(
+                "vrpn_Button::{what}() buttons id {button} is greater than the number of buttons({})",
+                self.num_buttons()
+            );
+            let _ = base::send_text(&self.conn, self.base.sender, TextSeverity::Error, 0, &text);
+            return Err(Error::Unsupported(
+                "button index outside the device's count",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Asks the server to make button `i` momentary.
+    pub fn set_momentary(&self, button: i32) -> Result<(), Error> {
+        self.check(button, "set_momentary")?;
+        self.admin(button, MOMENTARY)
+    }
+
+    /// Asks the server to make button `i` a toggle, initially on (`true`) or off.
+    pub fn set_toggle(&self, button: i32, on: bool) -> Result<(), Error> {
+        self.check(button, "set_toggle")?;
+        self.admin(button, if on { TOGGLE_ON } else { TOGGLE_OFF })
+    }
+
+    /// Asks the server to make every button momentary.
+    pub fn set_all_momentary(&self) -> Result<(), Error> {
+        self.admin(ALL_ID, MOMENTARY)
+    }
+
+    /// Asks the server to make every button a toggle.
+    pub fn set_all_toggle(&self, on: bool) -> Result<(), Error> {
+        self.admin(ALL_ID, if on { TOGGLE_ON } else { TOGGLE_OFF })
+    }
+
+    /// The ping cycle (server liveness).
+    pub fn ping_cycle(&self) -> &PingCycle {
+        &self.ping
+    }
+}
+
+impl Drop for ButtonRemote {
+    fn drop(&mut self) {
+        for h in self.handlers.drain(..) {
+            self.conn.remove_handler(h);
+        }
+    }
+}
+
+struct ServerState {
+    num: usize,
+    buttons: [i32; MAX_BUTTONS],
+    last: [i32; MAX_BUTTONS],
+    modes: [i32; MAX_BUTTONS],
+    timestamp: TimeVal,
+    alerts: bool,
+}
+
+#[derive(Clone, Copy)]
+struct ServerIds {
+    ids: ButtonIds,
+    base: BaseIds,
+    alert: TypeId,
+}
+
+fn send_states(conn: &Connection, ids: &ServerIds, st: &RefCell<ServerState>) {
+    let mut buf = [0u8; 4 + 4 * MAX_BUTTONS];
+    let (len, time) = {
+        let s = st.borrow();
+        let msg = codec::States {
+            count: s.num,
+            states: s.buttons,
+        };
+        (msg.encode(&mut buf), s.timestamp)
+    };
+    let _ = conn.pack_message(
+        time,
+        ids.ids.states,
+        ids.base.sender,
+        &buf[..len],
+        class::RELIABLE,
+    );
+}
+
+fn send_alert(conn: &Connection, ids: &ServerIds, time: TimeVal, button: i32, event: i32) {
+    let mut buf = [0u8; codec::Alert::LEN];
+    codec::Alert { button, event }.encode(&mut buf);
+    let _ = conn.pack_message(time, ids.alert, ids.base.sender, &buf, class::RELIABLE);
+}
+
+/// Server half of a button device (C++ `vrpn_Button_Filter` / `vrpn_Button_Server`).
+///
+/// Set physical states with [`set_button`](Self::set_button), then call
+/// [`report_changes`](Self::report_changes). Admin requests (from any sender on the
+/// connection, as C++), States on every new connection and on every ping from this device's
+/// sender are handled by the server itself.
+pub struct ButtonServer {
+    conn: Connection,
+    ids: ServerIds,
+    state: Rc<RefCell<ServerState>>,
+}
+
+impl ButtonServer {
+    /// Registers `device` with `buttons` buttons (clamped to 256).
+    pub fn new(device: &str, conn: &Connection, buttons: usize) -> Result<ButtonServer, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let bids = ButtonIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::serve_pings(conn, &base);
+        let alert = conn.register_type(codec::ALERT)?;
+        let ids = ServerIds {
+            ids: bids,
+            base,
+            alert,
+        };
+        let state = Rc::new(RefCell::new(ServerState {
+            num: buttons.min(MAX_BUTTONS),
+            buttons: [0; MAX_BUTTONS],
+            last: [0; MAX_BUTTONS],
+            modes: [MOMENTARY; MAX_BUTTONS],
+            timestamp: TimeVal::ZERO,
+            alerts: false,
+        }));
+
+        // States on each ping from our own sender (the pong goes out from serve_pings).
+        let (weak, st) = (conn.downgrade(), state.clone());
+        conn.register_handler(base.ping, SenderFilter::Only(sender), move |_| {
+            if let Some(c) = weak.upgrade() {
+                send_states(&c, &ids, &st);
+            }
+        });
+        // States on every new connection.
+        let (weak, st) = (conn.downgrade(), state.clone());
+        conn.on_event(ConnectionEvent::GotConnection, move || {
+            if let Some(c) = weak.upgrade() {
+                send_states(&c, &ids, &st);
+            }
+        });
+        // Admin from any sender, as C++.
+        let (weak, st) = (conn.downgrade(), state.clone());
+        conn.register_handler(bids.admin, SenderFilter::Any, move |m| {
+            let Some(c) = weak.upgrade() else { return };
+            let Ok(a) = codec::Admin::decode(m.payload) else {
+                return;
+            };
+            apply_admin(&c, &ids, &st, a.button, a.mode);
+        });
+        Ok(ButtonServer {
+            conn: conn.clone(),
+            ids,
+            state,
+        })
+    }
+
+    /// Number of buttons.
+    pub fn num_buttons(&self) -> usize {
+        self.state.borrow().num
+    }
+
+    /// Sets the physical state of button `i` (nonzero is pressed). Out-of-range is ignored.
+    pub fn set_button(&self, i: usize, pressed: bool) {
+        let mut s = self.state.borrow_mut();
+        if i < s.num {
+            s.buttons[i] = i32::from(pressed);
+        }
+    }
+
+    /// The physical state of button `i`.
+    pub fn button(&self, i: usize) -> i32 {
+        self.state.borrow().buttons.get(i).copied().unwrap_or(0)
+    }
+
+    /// The mode of button `i` ([`MOMENTARY`], [`TOGGLE_OFF`] or [`TOGGLE_ON`]).
+    pub fn mode(&self, i: usize) -> i32 {
+        self.state
+            .borrow()
+            .modes
+            .get(i)
+            .copied()
+            .unwrap_or(MOMENTARY)
+    }
+
+    /// Sets the time stamped on later reports.
+    pub fn set_timestamp(&self, t: TimeVal) {
+        self.state.borrow_mut().timestamp = t;
+    }
+
+    /// The device's current timestamp.
+    pub fn timestamp(&self) -> TimeVal {
+        self.state.borrow().timestamp
+    }
+
+    /// Enables or disables Alert messages (off by default, as C++).
+    pub fn set_alerts(&self, on: bool) {
+        self.state.borrow_mut().alerts = on;
+    }
+
+    /// Applies a mode change locally, exactly as an Admin request would.
+    pub fn set_mode(&self, button: i32, mode: i32) {
+        apply_admin(&self.conn, &self.ids, &self.state, button, mode);
+    }
+
+    /// Sends one Change per changed button (toggle semantics per mode), in index order.
+    pub fn report_changes(&self) {
+        // (button, state, alert event or 0); built first so no borrow is held while sending.
+        let mut out = [(0i32, 0i32, 0i32); MAX_BUTTONS];
+        let mut n = 0;
+        let (time, alerts) = {
+            let mut s = self.state.borrow_mut();
+            for i in 0..s.num {
+                let (now, last) = (s.buttons[i], s.last[i]);
+                match s.modes[i] {
+                    TOGGLE_ON if now != 0 && last == 0 => {
+                        s.modes[i] = TOGGLE_OFF;
+                        out[n] = (i as i32, 0, TOGGLE_OFF);
+                        n += 1;
+                    }
+                    TOGGLE_OFF if now != 0 && last == 0 => {
+                        s.modes[i] = TOGGLE_ON;
+                        out[n] = (i as i32, 1, TOGGLE_ON);
+                        n += 1;
+                    }
+                    TOGGLE_ON | TOGGLE_OFF => {}
+                    _ if now != last => {
+                        out[n] = (i as i32, now, 0);
+                        n += 1;
+                    }
+                    _ => {}
+                }
+                s.last[i] = now;
+            }
+            (s.timestamp, s.alerts)
+        };
+        for &(button, state, event) in &out[..n] {
+            if alerts && event != 0 {
+                send_alert(&self.conn, &self.ids, time, button, event);
+            }
+            let mut buf = [0u8; codec::Change::LEN];
+            codec::Change { button, state }.encode(&mut buf);
+            let _ = self.conn.pack_message(
+                time,
+                self.ids.ids.change,
+                self.ids.base.sender,
+                &buf,
+                class::RELIABLE,
+            );
+        }
+    }
+
+    /// Sends the States message now.
+    pub fn report_states(&self) {
+        send_states(&self.conn, &self.ids, &self.state);
+    }
+
+    /// Sends a text message from this device.
+    pub fn send_text(&self, severity: TextSeverity, level: u32, text: &str) -> Result<(), Error> {
+        base::send_text(&self.conn, self.ids.base.sender, severity, level, text)
+    }
+
+    /// The connection this server reports on.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+}
+
+fn apply_admin(
+    conn: &Connection,
+    ids: &ServerIds,
+    st: &RefCell<ServerState>,
+    button: i32,
+    mode: i32,
+) {
+    let mut alerts_out = [(0i32, 0i32); MAX_BUTTONS];
+    let mut n = 0;
+    let (time, alerts, err) = {
+        let mut s = st.borrow_mut();
+        let num = s.num;
+        let mut err = None;
+        if button == ALL_ID {
+            for i in 0..num {
+                if mode == MOMENTARY && s.modes[i] != MOMENTARY {
+                    s.modes[i] = MOMENTARY;
+                    alerts_out[n] = (i as i32, TOGGLE_OFF);
+                    n += 1;
+                } else if mode != MOMENTARY && s.modes[i] == MOMENTARY {
+                    s.modes[i] = if mode == TOGGLE_ON {
+                        TOGGLE_ON
+                    } else {
+                        TOGGLE_OFF
+                    };
+                    alerts_out[n] = (i as i32, mode);
+                    n += 1;
+                }
+            }
+        } else if button < 0 || button as usize >= num {
+            let what = if mode == MOMENTARY {
+                "set_momentary"
+            } else {
+                "set_toggle"
+            };
+            err = Some((what, button, num));
+        } else {
+            let i = button as usize;
+            if mode == MOMENTARY {
+                s.modes[i] = MOMENTARY;
+                alerts_out[n] = (button, TOGGLE_OFF);
+            } else {
+                let m = if mode == TOGGLE_ON {
+                    TOGGLE_ON
+                } else {
+                    TOGGLE_OFF
+                };
+                s.modes[i] = m;
+                alerts_out[n] = (button, m);
+            }
+            n += 1;
+        }
+        (s.timestamp, s.alerts, err)
+    };
+    if let Some((what, b, num)) = err {
+        let text = format!(
+            "vrpn_Button::{what}() buttons id {b} is greater than the number of buttons({num})"
+        );
+        let _ = base::send_text(conn, ids.base.sender, TextSeverity::Error, 0, &text);
+        return;
+    }
+    if alerts {
+        for &(b, e) in &alerts_out[..n] {
+            send_alert(conn, ids, time, b, e);
+        }
+    }
+}
+
+/// `vrpn_Button_Example NAME BUTTONS RATE`: every button flips together, `RATE` times a second;
+/// the first flip (all on) happens on the first mainloop.
+pub struct ButtonExample {
+    server: ButtonServer,
+    name: String,
+    period: Option<Duration>,
+    next: Instant,
+}
+
+impl ButtonExample {
+    /// An example button server.
+    pub fn new(
+        device: &str,
+        conn: &Connection,
+        buttons: usize,
+        rate: f64,
+    ) -> Result<ButtonExample, Error> {
+        Ok(ButtonExample {
+            server: ButtonServer::new(device, conn, buttons)?,
+            name: device.to_string(),
+            period: (rate > 0.0 && rate.is_finite()).then(|| Duration::from_secs_f64(1.0 / rate)),
+            next: Instant::now(),
+        })
+    }
+
+    /// The underlying button server.
+    pub fn server(&self) -> &ButtonServer {
+        &self.server
+    }
+
+    /// Flips every button and reports (one cycle of the example).
+    pub fn flip(&self) {
+        self.server.set_timestamp(TimeVal::now());
+        {
+            let mut s = self.server.state.borrow_mut();
+            for i in 0..s.num {
+                s.buttons[i] = i32::from(s.last[i] == 0);
+            }
+        }
+        self.server.report_changes();
+    }
+}
+
+impl ServerDevice for ButtonExample {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn mainloop(&mut self, now: Instant) {
+        let Some(period) = self.period else { return };
+        if now < self.next {
+            return;
+        }
+        self.flip();
+        self.next += period;
+        if self.next <= now {
+            self.next = now + period;
+        }
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.period.map(|_| self.next)
+    }
+}

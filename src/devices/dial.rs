@@ -1,0 +1,289 @@
+//! Dial (DEVICES.md §6): incremental rotation of each dial, in revolutions.
+//! [`DialRemote`] is the client half, [`DialServer`] the server half, [`DialExample`] the
+//! C++ `vrpn_Dial_Example_Server`.
+
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use super::base::{self, BaseIds, PingCycle};
+use super::text::TextSeverity;
+use super::ServerDevice;
+use crate::connection::Connection;
+use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::error::Error;
+use crate::name::DeviceName;
+use crate::time::TimeVal;
+use crate::wire::class;
+use crate::wire::payload::dial as codec;
+
+pub use codec::MAX_DIALS;
+
+/// Ids of the dial types on one connection.
+#[derive(Clone, Copy, Debug)]
+pub struct DialIds {
+    /// `vrpn_Dial update`.
+    pub update: TypeId,
+}
+
+impl DialIds {
+    /// Registers the dial type.
+    pub fn register(conn: &Connection) -> Result<DialIds, Error> {
+        Ok(DialIds {
+            update: conn.register_type(codec::UPDATE)?,
+        })
+    }
+}
+
+/// One dial moved (C++ `vrpn_DIALCB`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DialUpdate {
+    /// Time the server stamped on the report.
+    pub time: TimeVal,
+    /// Dial index.
+    pub dial: i32,
+    /// Revolutions since the previous report.
+    pub change: f64,
+}
+
+#[derive(Default)]
+struct RemoteShared {
+    update: CallbackList<DialUpdate>,
+    bad: std::cell::Cell<u64>,
+}
+
+/// Client half of a dial device.
+pub struct DialRemote {
+    conn: Connection,
+    ping: PingCycle,
+    shared: Rc<RemoteShared>,
+    device: String,
+    handlers: Vec<HandlerId>,
+}
+
+impl DialRemote {
+    /// Opens `Device@location` (sharing the connection with other devices at that location).
+    pub fn new(name: &str) -> Result<DialRemote, Error> {
+        let parsed = DeviceName::parse(name)?;
+        let conn = Connection::open_location(&parsed)?;
+        Self::on_connection(&parsed.device, &conn)
+    }
+
+    /// A remote for `device` on an existing connection.
+    pub fn on_connection(device: &str, conn: &Connection) -> Result<DialRemote, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let ids = DialIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::attach_default_printer(conn, &base);
+        let ping = PingCycle::new(conn, base);
+        let shared = Rc::new(RemoteShared::default());
+        let s = shared.clone();
+        let h = conn.register_handler(ids.update, SenderFilter::Only(sender), move |m| {
+            match codec::Update::decode(m.payload) {
+                Ok(u) => s.update.call(&DialUpdate {
+                    time: m.time,
+                    dial: u.dial,
+                    change: u.change,
+                }),
+                Err(_) => s.bad.set(s.bad.get() + 1),
+            }
+        });
+        Ok(DialRemote {
+            conn: conn.clone(),
+            ping,
+            shared,
+            device: device.to_string(),
+            handlers: vec![h],
+        })
+    }
+
+    /// Services the connection (all devices on it) and this device's ping cycle.
+    pub fn mainloop(&self) -> Result<(), Error> {
+        self.conn.mainloop()?;
+        self.ping.poll(&self.conn);
+        Ok(())
+    }
+
+    /// The connection this remote uses.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+
+    /// The device (sender) name.
+    pub fn device(&self) -> &str {
+        &self.device
+    }
+
+    /// Calls `f` for every dial update.
+    pub fn on_update(&self, f: impl FnMut(&DialUpdate) + 'static) -> HandlerId {
+        self.shared.update.add(f)
+    }
+
+    /// Removes a callback.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        self.shared.update.remove(id)
+    }
+
+    /// Updates that could not be decoded and were ignored.
+    pub fn bad_messages(&self) -> u64 {
+        self.shared.bad.get()
+    }
+
+    /// The ping cycle (server liveness).
+    pub fn ping_cycle(&self) -> &PingCycle {
+        &self.ping
+    }
+}
+
+impl Drop for DialRemote {
+    fn drop(&mut self) {
+        for h in self.handlers.drain(..) {
+            self.conn.remove_handler(h);
+        }
+    }
+}
+
+/// Server half of a dial device: accumulate rotation per dial, then report.
+pub struct DialServer {
+    conn: Connection,
+    ids: DialIds,
+    base: BaseIds,
+    num: usize,
+    dials: [f64; MAX_DIALS],
+    timestamp: TimeVal,
+}
+
+impl DialServer {
+    /// Registers `device` with `dials` dials (clamped to 128).
+    pub fn new(device: &str, conn: &Connection, dials: usize) -> Result<DialServer, Error> {
+        let sender = base::register_sender(conn, device)?;
+        let ids = DialIds::register(conn)?;
+        let base = base::register_base_types(conn, sender)?;
+        base::serve_pings(conn, &base);
+        Ok(DialServer {
+            conn: conn.clone(),
+            ids,
+            base,
+            num: dials.min(MAX_DIALS),
+            dials: [0.0; MAX_DIALS],
+            timestamp: TimeVal::ZERO,
+        })
+    }
+
+    /// Number of dials.
+    pub fn num_dials(&self) -> usize {
+        self.num
+    }
+
+    /// Sets the time stamped on later reports.
+    pub fn set_timestamp(&mut self, t: TimeVal) {
+        self.timestamp = t;
+    }
+
+    /// Sets dial `i`'s accumulated rotation (revolutions).
+    pub fn set_dial(&mut self, i: usize, revolutions: f64) {
+        if i < self.num {
+            self.dials[i] = revolutions;
+        }
+    }
+
+    /// Adds to dial `i`'s accumulated rotation.
+    pub fn add_rotation(&mut self, i: usize, revolutions: f64) {
+        if i < self.num {
+            self.dials[i] += revolutions;
+        }
+    }
+
+    fn send(&mut self, i: usize) {
+        let mut buf = [0u8; codec::Update::LEN];
+        codec::Update {
+            change: self.dials[i],
+            dial: i as i32,
+        }
+        .encode(&mut buf);
+        let _ = self.conn.pack_message(
+            self.timestamp,
+            self.ids.update,
+            self.base.sender,
+            &buf,
+            class::RELIABLE,
+        );
+        self.dials[i] = 0.0;
+    }
+
+    /// Sends one update per dial with nonzero rotation, then zeroes them.
+    pub fn report_changes(&mut self) {
+        for i in 0..self.num {
+            if self.dials[i] != 0.0 {
+                self.send(i);
+            }
+        }
+    }
+
+    /// Sends one update per dial, zeros included, then zeroes them.
+    pub fn report(&mut self) {
+        for i in 0..self.num {
+            self.send(i);
+        }
+    }
+
+    /// Sends a text message from this device.
+    pub fn send_text(&self, severity: TextSeverity, level: u32, text: &str) -> Result<(), Error> {
+        base::send_text(&self.conn, self.base.sender, severity, level, text)
+    }
+}
+
+/// `vrpn_Dial_Example NAME DIALS SPIN_RATE UPDATE_RATE`: every dial turns `SPIN_RATE`
+/// revolutions per second, reported `UPDATE_RATE` times a second (`SPIN_RATE/UPDATE_RATE` each).
+pub struct DialExample {
+    server: DialServer,
+    name: String,
+    step: f64,
+    period: Option<Duration>,
+    next: Instant,
+}
+
+impl DialExample {
+    /// An example dial server.
+    pub fn new(
+        device: &str,
+        conn: &Connection,
+        dials: usize,
+        spin_rate: f64,
+        update_rate: f64,
+    ) -> Result<DialExample, Error> {
+        let ok = update_rate > 0.0 && update_rate.is_finite();
+        Ok(DialExample {
+            server: DialServer::new(device, conn, dials)?,
+            name: device.to_string(),
+            step: if ok { spin_rate / update_rate } else { 0.0 },
+            period: ok.then(|| Duration::from_secs_f64(1.0 / update_rate)),
+            next: Instant::now(),
+        })
+    }
+}
+
+impl ServerDevice for DialExample {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn mainloop(&mut self, now: Instant) {
+        let Some(period) = self.period else { return };
+        if now < self.next {
+            return;
+        }
+        self.server.set_timestamp(TimeVal::now());
+        for i in 0..self.server.num_dials() {
+            self.server.set_dial(i, self.step);
+        }
+        self.server.report_changes();
+        self.next += period;
+        if self.next <= now {
+            self.next = now + period;
+        }
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.period.map(|_| self.next)
+    }
+}
