@@ -13,11 +13,15 @@ use vrpn::{
     TextSeverity, TrackerRemote,
 };
 
-const USAGE: &str = "usage: vrpn_print_devices [--json] [--seconds S] DEVICE@HOST[:PORT]...
+const USAGE: &str =
+    "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] DEVICE@HOST[:PORT]...
        vrpn_print_devices --list HOST[:PORT]
   DEVICE@HOST        e.g. Tracker0@localhost, Tracker0@tcp://host:3883, Tracker0@host:3884
   --json             one JSON object per report: device, kind, time, and the values
   --seconds S        exit after S seconds (default: run until interrupted)
+  --log FILE         log every message received to FILE (C++ .vrpn format; one file per
+                     server: FILE-2.vrpn, … for the second and later); replay it with
+                     DEVICE@file:FILE
   --list HOST[:PORT] print the device names the server announces, then exit";
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -120,6 +124,7 @@ fn list(location: &str) -> i32 {
 
 fn main() {
     let mut json = false;
+    let mut log: Option<String> = None;
     let mut seconds: Option<f64> = None;
     let mut names = Vec::new();
     let mut args = std::env::args().skip(1);
@@ -127,6 +132,13 @@ fn main() {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--json" => json = true,
+            "--log" => match args.next() {
+                Some(f) => log = Some(f),
+                None => {
+                    eprintln!("--log needs a file name\n{USAGE}");
+                    std::process::exit(2);
+                }
+            },
             "--seconds" => {
                 seconds = args.next().and_then(|s| s.parse().ok());
                 if seconds.is_none() {
@@ -157,6 +169,7 @@ fn main() {
         std::process::exit(2);
     }
     let mut trackers = Vec::new();
+    let mut logged: Vec<Connection> = Vec::new();
     let printed = Rc::new(Cell::new(0u64));
     for name in &names {
         if let Err(e) = DeviceName::parse(name) {
@@ -170,6 +183,23 @@ fn main() {
                 std::process::exit(2);
             }
         };
+        if let Some(path) = &log {
+            let conn = t.connection();
+            if !logged.iter().any(|c: &Connection| c.same_as(conn)) {
+                let file = match logged.len() {
+                    0 => path.clone(),
+                    n => match path.rfind('.') {
+                        Some(i) => format!("{}-{}{}", &path[..i], n + 1, &path[i..]),
+                        None => format!("{path}-{}", n + 1),
+                    },
+                };
+                if let Err(e) = conn.log_incoming(&file) {
+                    eprintln!("vrpn_print_devices: --log {file}: {e}");
+                    std::process::exit(2);
+                }
+                logged.push(conn.clone());
+            }
+        }
         let label = name.clone();
         let device = t.device().to_string();
         let p = printed.clone();

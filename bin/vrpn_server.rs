@@ -36,10 +36,6 @@ fn main() {
             std::process::exit(2);
         }
     };
-    if opts.log_in.is_some() || opts.log_out.is_some() {
-        eprintln!("vrpn_server: -li/-lo logging is not available in this build yet");
-        std::process::exit(2);
-    }
     install_signal_handlers();
     if opts.verbose {
         set_print_threshold(TextSeverity::Normal);
@@ -58,6 +54,20 @@ fn main() {
             std::process::exit(1);
         }
     };
+    // Logs open before the devices register, so their descriptions are logged (as C++).
+    for (path, incoming) in [(&opts.log_in, true), (&opts.log_out, false)] {
+        if let Some(path) = path {
+            let r = if incoming {
+                conn.log_incoming(path)
+            } else {
+                conn.log_outgoing(path)
+            };
+            if let Err(e) = r {
+                eprintln!("vrpn_server: {path}: {e}");
+                std::process::exit(1);
+            }
+        }
+    }
     let devices = match build_devices(&entries, &conn, opts.warn_only, opts.verbose) {
         Ok(d) => d,
         Err(e) => {
@@ -85,7 +95,13 @@ fn main() {
     );
     let mut server = ServerLoop::new(conn, devices, opts.sleep);
     server.quit_after_last(opts.quit_after_last);
-    if let Err(e) = server.run(&STOP) {
+    server.flush_logs_every_pass(opts.flush_logs);
+    let result = server.run(&STOP);
+    // Close the logs (DISCONNECT entry, flush) before exiting.
+    if let Err(e) = server.connection().close_logs() {
+        eprintln!("vrpn_server: {e}");
+    }
+    if let Err(e) = result {
         eprintln!("vrpn_server: {e}");
         std::process::exit(1);
     }

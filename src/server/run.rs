@@ -17,6 +17,7 @@ pub struct ServerLoop {
     quit_after_last: bool,
     last_left: std::rc::Rc<std::cell::Cell<bool>>,
     last_activity: Instant,
+    flush_logs: bool,
 }
 
 impl ServerLoop {
@@ -32,7 +33,13 @@ impl ServerLoop {
             quit_after_last: false,
             last_left,
             last_activity: Instant::now(),
+            flush_logs: false,
         }
+    }
+
+    /// Write all log data after every pass (`-flush`).
+    pub fn flush_logs_every_pass(&mut self, yes: bool) {
+        self.flush_logs = yes;
     }
 
     /// Stop when the last client disconnects (`-q`).
@@ -53,6 +60,9 @@ impl ServerLoop {
             d.mainloop(now);
         }
         self.conn.mainloop()?;
+        if self.flush_logs {
+            self.conn.flush_logs()?;
+        }
         Ok(!(self.quit_after_last && self.last_left.get()))
     }
 
