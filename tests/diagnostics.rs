@@ -46,8 +46,9 @@ fn silent_server_gets_an_explanation_and_mainloop_never_blocks() {
         slowest = slowest.max(t.elapsed());
         std::thread::sleep(Duration::from_millis(2));
     }
+    // A blocking connect (as C++ does) would stall for about 1 s; allow for a loaded machine.
     assert!(
-        slowest < Duration::from_millis(50),
+        slowest < Duration::from_millis(250),
         "mainloop blocked {slowest:?}"
     );
     assert_eq!(conn.state(), ConnectionState::Connecting);

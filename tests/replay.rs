@@ -79,8 +79,10 @@ fn cpp_client_log_replays_at_the_original_pace_with_original_timestamps() {
     );
     let (wall10, times10) = replay_client_log(10.0);
     assert_eq!(times10.len(), poses.len());
+    eprintln!("replay pace: {span:.3} s log took {wall:.3} s at rate 1, {wall10:.4} s at rate 10");
+    // 5%, plus 10 ms for scheduling jitter on a loaded 2-core machine.
     assert!(
-        (wall10 - span / 10.0).abs() <= span / 10.0 * 0.05 + 0.003,
+        (wall10 - span / 10.0).abs() <= span / 10.0 * 0.05 + 0.010,
         "rate 10: {wall10:.4} s for a {span:.3} s log"
     );
 }

@@ -1259,9 +1259,7 @@ impl Core {
             }
             system::UDP_DESCRIPTION => {
                 // Replayed logs carry UDP descriptions too; they open nothing.
-                let Some(udp_out) = udp_out else {
-                    return None;
-                };
+                let udp_out = udp_out?;
                 if tcp_only || ep.udp_ready {
                     if !tcp_only {
                         // A repeated description (new port after the peer reconnected its UDP).
