@@ -154,7 +154,10 @@ impl Net {
         let poses = counter();
         let mut hit = bump(&poses);
         remote.on_pose(move |_| hit());
-        let c2s_sender = remote.connection().register_sender("zero_alloc client").unwrap();
+        let c2s_sender = remote
+            .connection()
+            .register_sender("zero_alloc client")
+            .unwrap();
         let c2s_type = remote.connection().register_type("zero_alloc c2s").unwrap();
         // Pings from the device's sender, answered by the server from inside its handler (the
         // deferred-delivery path), come back as pongs.
@@ -283,7 +286,10 @@ fn udp_reports_do_not_allocate() {
     let after = udp_out_datagrams();
     // UDP may drop, but on loopback with both ends reading every pass it should not.
     assert!(poses >= N * 99 / 100, "poses delivered over UDP: {poses}");
-    assert!(c2s >= N * 99 / 100, "client messages delivered over UDP: {c2s}");
+    assert!(
+        c2s >= N * 99 / 100,
+        "client messages delivered over UDP: {c2s}"
+    );
     if let (Some(b), Some(a)) = (before, after) {
         // One datagram per mainloop pass and direction: both directions went over UDP.
         assert!(a - b >= 2 * N, "only {} UDP datagrams went out", a - b);

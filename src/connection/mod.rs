@@ -453,14 +453,13 @@ impl Connection {
         if self.inner.dispatching.get() {
             return Ok(());
         }
-        let now = Instant::now();
         {
             let mut core = self.inner.core.borrow_mut();
             core.poll_io(Some(Duration::ZERO))?;
-            core.service_setup(now);
+            core.service_setup();
             core.begin_pass();
         }
-        self.pump(now);
+        self.pump();
         self.inner.core.borrow_mut().flush();
         Ok(())
     }
@@ -485,9 +484,9 @@ impl Connection {
         std::mem::take(&mut self.inner.core.borrow_mut().activity)
     }
 
-    fn pump(&self, now: Instant) {
+    fn pump(&self) {
         loop {
-            let next = self.inner.core.borrow_mut().next_delivery(now);
+            let next = self.inner.core.borrow_mut().next_delivery();
             let Some(d) = next else {
                 break;
             };
