@@ -473,14 +473,13 @@ impl Connection {
         if self.inner.dispatching.get() {
             return Ok(());
         }
-        let now = Instant::now();
         {
             let mut core = self.inner.core.borrow_mut();
             core.poll_io(Some(Duration::ZERO))?;
-            core.service_setup(now);
+            core.service_setup();
             core.begin_pass();
         }
-        self.pump(now);
+        self.pump();
         let mut core = self.inner.core.borrow_mut();
         core.flush();
         core.flush_logs_some(LOG_FLUSH_PER_PASS);
@@ -553,9 +552,9 @@ impl Connection {
         std::mem::take(&mut self.inner.core.borrow_mut().activity)
     }
 
-    fn pump(&self, now: Instant) {
+    fn pump(&self) {
         loop {
-            let next = self.inner.core.borrow_mut().next_delivery(now);
+            let next = self.inner.core.borrow_mut().next_delivery();
             let Some(d) = next else {
                 break;
             };
@@ -691,14 +690,14 @@ impl ReplayControl<'_> {
     /// Back to the start (handlers see a dropped-connection event, as in C++).
     pub fn reset(&self) {
         self.conn.with_replay(|r| r.reset());
-        self.conn.pump(Instant::now());
+        self.conn.pump();
     }
 
     /// Plays, now, every message up to `secs` after the first one (rewinding first when that
     /// is behind the current position).
     pub fn play_to_time(&self, secs: f64) {
         self.conn.with_replay(|r| r.play_to_time(secs));
-        self.conn.pump(Instant::now());
+        self.conn.pump();
     }
 
     /// Plays the next message now, whatever its time. Returns false at the end of the file.
@@ -707,7 +706,7 @@ impl ReplayControl<'_> {
             return false;
         }
         self.conn.with_replay(|r| r.play_one());
-        self.conn.pump(Instant::now());
+        self.conn.pump();
         true
     }
 
@@ -754,7 +753,7 @@ impl Connection {
     /// Consumes due replay entries without delivering user messages (jump).
     fn skip_due(&self) {
         loop {
-            let d = self.inner.core.borrow_mut().next_delivery(Instant::now());
+            let d = self.inner.core.borrow_mut().next_delivery();
             match d {
                 None => break,
                 Some(Delivery::Message { .. }) => {}

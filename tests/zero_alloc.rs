@@ -1,0 +1,298 @@
+//! Once a connection is up and its names are registered, sending, receiving and dispatching
+//! allocate nothing: checked with a counting global allocator on every transport (in-process,
+//! TCP-only, UDP+TCP), in both directions, and for idle `mainloop()` calls.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::net::Ipv4Addr;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use vrpn::wire::class;
+use vrpn::{Connection, SenderFilter, TimeVal, TrackerRemote, TrackerServer};
+
+/// Counts allocations (alloc, alloc_zeroed, realloc) made by the current thread while enabled.
+struct Counting;
+
+thread_local! {
+    static ENABLED: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<u64> = const { Cell::new(0) };
+}
+
+fn note_alloc() {
+    let on = ENABLED.try_with(Cell::get).unwrap_or(false);
+    if on {
+        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc(layout)
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc_zeroed(layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_alloc();
+        System.realloc(ptr, layout, new_size)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Runs `f` and returns how many allocations this thread made meanwhile.
+fn allocations_in(f: impl FnOnce()) -> u64 {
+    COUNT.with(|c| c.set(0));
+    ENABLED.with(|e| e.set(true));
+    f();
+    ENABLED.with(|e| e.set(false));
+    COUNT.with(Cell::get)
+}
+
+const N: u64 = 10_000;
+const IDENTITY: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
+
+fn counter() -> Rc<Cell<u64>> {
+    Rc::new(Cell::new(0))
+}
+
+fn bump(c: &Rc<Cell<u64>>) -> impl FnMut() + 'static {
+    let c = c.clone();
+    move || c.set(c.get() + 1)
+}
+
+/// `OutDatagrams` of this network namespace (`/proc/net/snmp`): evidence that UDP was used.
+fn udp_out_datagrams() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/net/snmp").ok()?;
+    let mut lines = text.lines().filter(|l| l.starts_with("Udp:"));
+    let names = lines.next()?;
+    let values = lines.next()?;
+    let col = names.split_whitespace().position(|n| n == "OutDatagrams")?;
+    values.split_whitespace().nth(col)?.parse().ok()
+}
+
+#[test]
+fn in_process_reports_do_not_allocate() {
+    let conn = Connection::new_loopback();
+    let server = TrackerServer::new("Tracker0", &conn, 2).unwrap();
+    let remote = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    let poses = counter();
+    let mut hit = bump(&poses);
+    remote.on_pose(move |_| hit());
+    // A raw handler of a user type, sent with pack_message.
+    let sender = conn.register_sender("raw sender").unwrap();
+    let raw_type = conn.register_type("zero_alloc raw").unwrap();
+    let raws = counter();
+    let mut hit = bump(&raws);
+    conn.register_handler(raw_type, SenderFilter::Only(sender), move |_| hit());
+
+    for i in 0..500 {
+        server
+            .report_pose(i % 2, TimeVal::now(), [1.0, 2.0, 3.0], IDENTITY)
+            .unwrap();
+        conn.pack_message(TimeVal::now(), raw_type, sender, &[7; 16], class::RELIABLE)
+            .unwrap();
+        remote.mainloop().unwrap();
+    }
+    let (p0, r0) = (poses.get(), raws.get());
+    let allocs = allocations_in(|| {
+        for i in 0..N {
+            server
+                .report_pose((i % 2) as i32, TimeVal::now(), [1.0, 2.0, 3.0], IDENTITY)
+                .unwrap();
+            conn.pack_message(TimeVal::now(), raw_type, sender, &[7; 16], class::RELIABLE)
+                .unwrap();
+            if i % 10 == 0 {
+                remote.mainloop().unwrap();
+            }
+        }
+        for _ in 0..1000 {
+            conn.mainloop().unwrap();
+            remote.mainloop().unwrap();
+        }
+    });
+    assert_eq!(poses.get() - p0, N, "every pose delivered");
+    assert_eq!(raws.get() - r0, N, "every raw message delivered");
+    assert_eq!(allocs, 0, "allocations while reporting in-process");
+}
+
+/// A tracker server and a remote on real sockets, plus a user type the client sends to the
+/// server, so that both directions are exercised.
+struct Net {
+    server_conn: Connection,
+    server: TrackerServer,
+    remote: TrackerRemote,
+    poses: Rc<Cell<u64>>,
+    c2s: Rc<Cell<u64>>,
+    c2s_type: vrpn::TypeId,
+    c2s_sender: vrpn::SenderId,
+    pongs: Rc<Cell<u64>>,
+    ping_type: vrpn::TypeId,
+    tracker: vrpn::SenderId,
+}
+
+impl Net {
+    fn new(name_fmt: &str) -> Net {
+        let server_conn = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+        let port = server_conn.local_port().unwrap();
+        let server = TrackerServer::new("Tracker0", &server_conn, 2).unwrap();
+        let s_type = server_conn.register_type("zero_alloc c2s").unwrap();
+        let c2s = counter();
+        let mut hit = bump(&c2s);
+        server_conn.register_handler(s_type, SenderFilter::Any, move |m| {
+            assert_eq!(m.payload.len(), 16);
+            hit()
+        });
+        let remote = TrackerRemote::new(&name_fmt.replace("PORT", &port.to_string())).unwrap();
+        let poses = counter();
+        let mut hit = bump(&poses);
+        remote.on_pose(move |_| hit());
+        let c2s_sender = remote
+            .connection()
+            .register_sender("zero_alloc client")
+            .unwrap();
+        let c2s_type = remote.connection().register_type("zero_alloc c2s").unwrap();
+        // Pings from the device's sender, answered by the server from inside its handler (the
+        // deferred-delivery path), come back as pongs.
+        let client = remote.connection();
+        let tracker = client.register_sender("Tracker0").unwrap();
+        let ping_type = client.register_type("vrpn_Base ping_message").unwrap();
+        let pong_type = client.register_type("vrpn_Base pong_message").unwrap();
+        let pongs = counter();
+        let mut hit = bump(&pongs);
+        client.register_handler(pong_type, SenderFilter::Only(tracker), move |_| hit());
+        Net {
+            server_conn,
+            server,
+            remote,
+            poses,
+            c2s,
+            c2s_type,
+            c2s_sender,
+            pongs,
+            ping_type,
+            tracker,
+        }
+    }
+
+    fn step(&self, i: u64, c2s_class: u32) {
+        self.server
+            .report_pose((i % 2) as i32, TimeVal::now(), [1.0, 2.0, 3.0], IDENTITY)
+            .unwrap();
+        self.remote
+            .connection()
+            .pack_message(
+                TimeVal::now(),
+                self.c2s_type,
+                self.c2s_sender,
+                &[9; 16],
+                c2s_class,
+            )
+            .unwrap();
+        if i % 100 == 0 {
+            self.remote
+                .connection()
+                .pack_message(
+                    TimeVal::now(),
+                    self.ping_type,
+                    self.tracker,
+                    &[],
+                    class::RELIABLE,
+                )
+                .unwrap();
+        }
+        self.server_conn.mainloop().unwrap();
+        self.remote.mainloop().unwrap();
+    }
+
+    /// Connects, lets the ping cycle finish and exchanges a few hundred messages each way.
+    fn warm_up(&self, c2s_class: u32) {
+        let start = Instant::now();
+        while !self.remote.connection().connected() {
+            assert!(start.elapsed() < Duration::from_secs(10), "no connection");
+            self.server_conn.mainloop().unwrap();
+            self.remote.mainloop().unwrap();
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        let mut i = 0;
+        while self.poses.get() < 500
+            || self.c2s.get() < 500
+            || self.remote.ping_cycle().waiting_for_pong()
+        {
+            assert!(start.elapsed() < Duration::from_secs(10), "warm-up stalled");
+            self.step(i, c2s_class);
+            i += 1;
+        }
+        // Let what is in flight arrive, so that the measurement starts from a quiet state.
+        let quiet = Instant::now();
+        while quiet.elapsed() < Duration::from_millis(50) {
+            self.server_conn.mainloop().unwrap();
+            self.remote.mainloop().unwrap();
+        }
+    }
+
+    /// Sends N messages each way (with both mainloops per message) and a ping every hundred,
+    /// then drains, and returns (poses, client-to-server messages) delivered and the
+    /// allocations made.
+    fn measure(&self, c2s_class: u32) -> (u64, u64, u64) {
+        let (p0, c0, g0) = (self.poses.get(), self.c2s.get(), self.pongs.get());
+        let allocs = allocations_in(|| {
+            for i in 0..N {
+                self.step(i, c2s_class);
+            }
+            // Drain what is in flight, then idle loops.
+            let start = Instant::now();
+            while (self.poses.get() - p0 < N
+                || self.c2s.get() - c0 < N
+                || self.pongs.get() - g0 < N / 100)
+                && start.elapsed() < Duration::from_millis(500)
+            {
+                self.server_conn.mainloop().unwrap();
+                self.remote.mainloop().unwrap();
+            }
+            for _ in 0..1000 {
+                self.server_conn.mainloop().unwrap();
+                self.remote.mainloop().unwrap();
+            }
+        });
+        assert_eq!(self.pongs.get() - g0, N / 100, "every ping answered");
+        (self.poses.get() - p0, self.c2s.get() - c0, allocs)
+    }
+}
+
+#[test]
+fn tcp_only_reports_do_not_allocate() {
+    let net = Net::new("Tracker0@tcp://127.0.0.1:PORT");
+    net.warm_up(class::RELIABLE);
+    let (poses, c2s, allocs) = net.measure(class::RELIABLE);
+    assert_eq!(poses, N, "every pose delivered over TCP");
+    assert_eq!(c2s, N, "every client message delivered over TCP");
+    assert_eq!(allocs, 0, "allocations on the TCP path");
+}
+
+#[test]
+fn udp_reports_do_not_allocate() {
+    let net = Net::new("Tracker0@127.0.0.1:PORT");
+    net.warm_up(class::LOW_LATENCY);
+    let before = udp_out_datagrams();
+    let (poses, c2s, allocs) = net.measure(class::LOW_LATENCY);
+    let after = udp_out_datagrams();
+    // UDP may drop, but on loopback with both ends reading every pass it should not.
+    assert!(poses >= N * 99 / 100, "poses delivered over UDP: {poses}");
+    assert!(
+        c2s >= N * 99 / 100,
+        "client messages delivered over UDP: {c2s}"
+    );
+    if let (Some(b), Some(a)) = (before, after) {
+        // One datagram per mainloop pass and direction: both directions went over UDP.
+        assert!(a - b >= 2 * N, "only {} UDP datagrams went out", a - b);
+    }
+    assert_eq!(allocs, 0, "allocations on the UDP path");
+}
