@@ -25,6 +25,7 @@
 pub mod format;
 pub mod names;
 pub mod reader;
+pub mod tools;
 pub mod writer;
 
 pub use format::{
