@@ -26,6 +26,7 @@ pub mod format;
 pub mod names;
 pub mod reader;
 pub mod replay;
+pub mod tools;
 pub mod writer;
 
 pub use format::{
