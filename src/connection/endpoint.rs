@@ -164,25 +164,69 @@ impl DatagramQueue {
     }
 }
 
-/// One received datagram being walked message by message.
+/// Bytes of one inbox slot: a C++ receiver's 1480-byte limit plus alignment room.
+pub(crate) const INBOX_SLOT: usize = MAX_UDP_INBOUND + 8;
+/// Datagrams taken per receive call. Two, so that a batch of one proves the queue empty.
+pub(crate) const INBOX_SLOTS: usize = 2;
+
+/// Received datagrams (up to [`INBOX_SLOTS`] per system call), walked message by message.
 #[derive(Debug)]
 pub(crate) struct DatagramInbox {
     pub(crate) buf: Vec<u8>,
-    pub(crate) len: usize,
-    pub(crate) pos: usize,
+    pub(crate) lens: [usize; INBOX_SLOTS],
+    /// Datagrams held.
+    pub(crate) count: usize,
+    /// Datagram being walked.
+    cur: usize,
+    /// Position inside it.
+    pos: usize,
 }
 
 impl DatagramInbox {
     fn new() -> DatagramInbox {
         DatagramInbox {
-            buf: vec![0; MAX_UDP_INBOUND + 8],
-            len: 0,
+            buf: vec![0; INBOX_SLOT * INBOX_SLOTS],
+            lens: [0; INBOX_SLOTS],
+            count: 0,
+            cur: 0,
             pos: 0,
         }
     }
 
+    /// Everything received has been walked.
     pub(crate) fn is_drained(&self) -> bool {
-        self.pos >= self.len
+        self.cur >= self.count
+    }
+
+    /// Starts walking `count` freshly received datagrams.
+    pub(crate) fn filled(&mut self, count: usize) {
+        self.count = count;
+        self.cur = 0;
+        self.pos = 0;
+    }
+
+    /// The unwalked rest of the current datagram.
+    pub(crate) fn current(&self) -> &[u8] {
+        if self.is_drained() {
+            return &[];
+        }
+        let start = self.cur * INBOX_SLOT;
+        &self.buf[start + self.pos..start + self.lens[self.cur]]
+    }
+
+    /// Moves past `n` bytes of the current datagram, to the next datagram at its end.
+    pub(crate) fn advance(&mut self, n: usize) {
+        self.pos += n;
+        if self.cur < self.count && self.pos >= self.lens[self.cur] {
+            self.cur += 1;
+            self.pos = 0;
+        }
+    }
+
+    /// Skips the rest of the current datagram (malformed or empty).
+    pub(crate) fn skip_datagram(&mut self) {
+        let rest = self.current().len();
+        self.advance(rest.max(1));
     }
 }
 

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Events, Interest, Poll, Token};
 
-use crate::connection::endpoint::{Endpoint, Phase};
+use crate::connection::endpoint::{DatagramInbox, Endpoint, Phase, INBOX_SLOT, INBOX_SLOTS};
 use crate::connection::names::Names;
 use crate::connection::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 use crate::error::Error;
@@ -1144,11 +1144,15 @@ impl Core {
                     p.io.udp_readable = false;
                     return None;
                 };
-                match sock.recv(&mut p.ep.udp_rx.buf) {
+                match recv_datagrams(sock, &mut p.ep.udp_rx) {
                     Ok(n) => {
-                        p.ep.udp_rx.len = n;
-                        p.ep.udp_rx.pos = 0;
+                        p.ep.udp_rx.filled(n);
                         self.activity = true;
+                        // A short batch proves the queue empty (edge-triggered epoll raises a
+                        // new event for the next arrival): no WouldBlock call needed.
+                        if n < INBOX_SLOTS && SHORT_READ_DRAINS {
+                            p.io.udp_readable = false;
+                        }
                     }
                     Err(e) if would_block(&e) => {
                         p.io.udp_readable = false;
@@ -1157,8 +1161,7 @@ impl Core {
                     Err(_) => return None,
                 }
             }
-            let inbox = &p.ep.udp_rx;
-            let dg = &inbox.buf[inbox.pos..inbox.len];
+            let dg = p.ep.udp_rx.current();
             let mut it = wire::DatagramMessages::new(dg);
             match it.next() {
                 Some(Ok((h, payload))) => {
@@ -1167,7 +1170,7 @@ impl Core {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
                     let p = self.peers[i].as_mut()?;
-                    p.ep.udp_rx.pos += advance;
+                    p.ep.udp_rx.advance(advance);
                     let tcp_only = p.ep.tcp_only;
                     if let Some(w) = p.log_in.as_mut().or(self.log_in.as_mut()) {
                         let _ = w.log_message(h.type_id, h.sender, h.time, &self.scratch[..len]);
@@ -1198,14 +1201,14 @@ impl Core {
                     // since the inbound socket accepts any source and one stray packet must not
                     // cut a client off.
                     let p = self.peers[i].as_mut()?;
-                    p.ep.udp_rx.pos = p.ep.udp_rx.len;
+                    p.ep.udp_rx.skip_datagram();
                     let t = format!("discarded a malformed UDP datagram from {}: {e}", p.ep.peer);
                     self.notice(Severity::Warning, t);
                     return self.queue.pop_front();
                 }
                 None => {
                     let p = self.peers[i].as_mut()?;
-                    p.ep.udp_rx.pos = p.ep.udp_rx.len;
+                    p.ep.udp_rx.skip_datagram();
                 }
             }
         }
@@ -1686,4 +1689,49 @@ pub(crate) fn compound_log_name(template: &str, n: u32) -> String {
         Some(i) => format!("{}-{n}{}", &template[..i], &template[i..]),
         None => format!("{template}-{n}"),
     }
+}
+
+/// Receives up to [`INBOX_SLOTS`] datagrams with one `recvmmsg` call. Returns how many arrived.
+#[cfg(any(target_os = "linux", target_os = "android"))]
+fn recv_datagrams(sock: &UdpSocket, inbox: &mut DatagramInbox) -> io::Result<usize> {
+    use nix::libc;
+    use std::os::fd::AsRawFd;
+    let base = inbox.buf.as_mut_ptr();
+    // SAFETY: every iovec points into `inbox.buf`, which holds INBOX_SLOTS slots of INBOX_SLOT
+    // bytes and outlives the call; the mmsghdr array is zero-initialised (a valid empty header
+    // for recvmmsg) and only its iov fields are set; the kernel writes at most iov_len bytes
+    // per slot and the message lengths into `msg_len`.
+    unsafe {
+        let mut iov: [libc::iovec; INBOX_SLOTS] = std::mem::zeroed();
+        let mut msgs: [libc::mmsghdr; INBOX_SLOTS] = std::mem::zeroed();
+        for k in 0..INBOX_SLOTS {
+            iov[k].iov_base = base.add(k * INBOX_SLOT).cast();
+            iov[k].iov_len = INBOX_SLOT;
+            msgs[k].msg_hdr.msg_iov = &mut iov[k];
+            msgs[k].msg_hdr.msg_iovlen = 1;
+        }
+        let n = libc::recvmmsg(
+            sock.as_raw_fd(),
+            msgs.as_mut_ptr(),
+            INBOX_SLOTS as _,
+            libc::MSG_DONTWAIT as _,
+            std::ptr::null_mut(),
+        );
+        if n < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        let n = n as usize;
+        for k in 0..n {
+            inbox.lens[k] = msgs[k].msg_len as usize;
+        }
+        Ok(n)
+    }
+}
+
+/// Portable fallback: one datagram per call.
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+fn recv_datagrams(sock: &UdpSocket, inbox: &mut DatagramInbox) -> io::Result<usize> {
+    let n = sock.recv(&mut inbox.buf[..INBOX_SLOT])?;
+    inbox.lens[0] = n;
+    Ok(1)
 }
