@@ -1721,8 +1721,8 @@ fn recv_datagrams(sock: &UdpSocket, inbox: &mut DatagramInbox) -> io::Result<usi
             return Err(io::Error::last_os_error());
         }
         let n = n as usize;
-        for k in 0..n {
-            inbox.lens[k] = msgs[k].msg_len as usize;
+        for (len, msg) in inbox.lens.iter_mut().zip(&msgs).take(n) {
+            *len = msg.msg_len as usize;
         }
         Ok(n)
     }
