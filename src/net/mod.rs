@@ -485,6 +485,8 @@ impl Core {
             );
         }
         let mut ep = Endpoint::new(tcp_only, peer, self.limits.max_pending_output);
+        ep.max_payload = self.limits.max_message_payload;
+        ep.max_names = self.limits.max_names_per_peer;
         if let Kind::Client(c) = &self.kind {
             ep.seq_tcp = c.seq.0;
             ep.seq_udp = c.seq.1;
@@ -966,6 +968,20 @@ impl Core {
         payload: &[u8],
         tcp_only: bool,
     ) -> Option<Delivery> {
+        if payload.len() > p.ep.max_payload {
+            queue.push_back(Delivery::Notice(Notice {
+                severity: Severity::Warning,
+                text: format!(
+                    "{} sent a {}-byte message; the limit is {} bytes \
+                     (Limits::max_message_payload)",
+                    p.ep.peer,
+                    payload.len(),
+                    p.ep.max_payload
+                ),
+            }));
+            p.ep.protocol_error = true;
+            return None;
+        }
         match h.type_id {
             system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION => {
                 let is_sender = h.type_id == system::SENDER_DESCRIPTION;
@@ -985,6 +1001,26 @@ impl Core {
                 } else {
                     &mut names.types
                 };
+                let remote_table = if is_sender {
+                    &p.ep.remote_senders
+                } else {
+                    &p.ep.remote_types
+                };
+                let rebinds = !matches!(table.get(name),
+                    Some(l) if Endpoint::lookup(remote_table, h.sender) == l);
+                if rebinds && !p.ep.note_description(is_sender) {
+                    queue.push_back(Delivery::Notice(Notice {
+                        severity: Severity::Warning,
+                        text: format!(
+                            "{} described more than {} {} names (Limits::max_names_per_peer)",
+                            p.ep.peer,
+                            p.ep.max_names,
+                            if is_sender { "sender" } else { "type" }
+                        ),
+                    }));
+                    p.ep.protocol_error = true;
+                    return None;
+                }
                 let (local, new) = match table.register(name) {
                     Ok(r) => r,
                     Err(e) => {
