@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Events, Interest, Poll, Token};
 
-use crate::connection::endpoint::{Endpoint, Phase};
+use crate::connection::endpoint::{Channel, Endpoint, Phase};
 use crate::connection::names::Names;
 use crate::connection::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 use crate::error::Error;
@@ -1252,15 +1252,28 @@ impl Core {
         class_of_service: u32,
     ) {
         let mut overflow = None;
+        let mut shedding = None;
         for (i, p) in self.peers.iter_mut().enumerate() {
             if let Some(p) = p {
-                if p.ep
-                    .pack(time, sender, type_id, payload, class_of_service)
-                    .is_err()
-                {
-                    overflow = Some(i);
+                match p.ep.pack(time, sender, type_id, payload, class_of_service) {
+                    Err(_) => overflow = Some(i),
+                    // Say so once per peer, when it first sheds unreliable traffic.
+                    Ok(Channel::Discarded) if p.ep.unreliable_dropped == 1 => {
+                        shedding = Some((p.ep.peer.clone(), p.ep.tx.pending_len()));
+                    }
+                    Ok(_) => {}
                 }
             }
+        }
+        if let Some((who, pending)) = shedding {
+            self.notice(
+                Severity::Warning,
+                format!(
+                    "{who} is falling behind ({pending} bytes of output pending): dropping \
+                     its unreliable messages while the backlog exceeds half of \
+                     Limits::max_pending_output"
+                ),
+            );
         }
         if let Some(i) = overflow {
             // Rare path: one slow peer at a time is enough to handle per message.
