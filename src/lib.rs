@@ -38,6 +38,8 @@ pub mod connection;
 pub mod devices;
 pub mod dispatch;
 mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod log;
 pub mod name;
 mod net;

@@ -262,6 +262,18 @@ pub(crate) struct Endpoint {
     pub(crate) peer_version: Option<String>,
     /// The peer broke the protocol; the I/O layer drops it.
     pub(crate) protocol_error: bool,
+    /// Largest payload accepted from this peer (`Limits::max_message_payload`).
+    pub(crate) max_payload: usize,
+    /// Sender names, and separately type names, this peer may describe
+    /// (`Limits::max_names_per_peer`).
+    pub(crate) max_names: usize,
+    /// Sender names this peer described (each new name-to-id binding counts once).
+    pub(crate) senders_described: usize,
+    /// Type names this peer described.
+    pub(crate) types_described: usize,
+    /// Unreliable messages not queued on TCP because the peer's reliable backlog was already
+    /// past half its limit: unreliable traffic gives way before reliable traffic does.
+    pub(crate) unreliable_dropped: u64,
 }
 
 impl Endpoint {
@@ -281,7 +293,23 @@ impl Endpoint {
             peer,
             peer_version: None,
             protocol_error: false,
+            max_payload: crate::wire::MAX_TCP_PADDED_PAYLOAD,
+            max_names: MAX_IDS,
+            senders_described: 0,
+            types_described: 0,
+            unreliable_dropped: 0,
         }
+    }
+
+    /// Counts one new name this peer described; false once it passes `max_names`.
+    pub(crate) fn note_description(&mut self, is_sender: bool) -> bool {
+        let n = if is_sender {
+            &mut self.senders_described
+        } else {
+            &mut self.types_described
+        };
+        *n += 1;
+        *n <= self.max_names
     }
 
     pub(crate) fn clear_remote_names(&mut self) {
@@ -346,6 +374,15 @@ impl Endpoint {
             type_id,
             seq: 0,
         };
+        if !use_udp
+            && class_of_service & class::RELIABLE == 0
+            && self.tx.pending_len() > self.tx.limit / 2
+        {
+            // The peer is falling behind on TCP: shed unreliable traffic first, so the
+            // reliable backlog limit is reached only by reliable messages.
+            self.unreliable_dropped += 1;
+            return Ok(Channel::Discarded);
+        }
         if use_udp {
             h.seq = self.seq_udp;
             self.seq_udp = self.seq_udp.wrapping_add(1);
@@ -426,5 +463,41 @@ mod tests {
             Ok(Channel::Tcp)
         );
         assert_eq!((ep.seq_tcp, ep.seq_udp), (2, 1));
+    }
+
+    #[test]
+    fn unreliable_gives_way_first_under_backlog() {
+        let mut ep = Endpoint::new(true, "peer".into(), 1000);
+        ep.phase = Phase::Connected;
+        // Fill past half the limit with reliable messages.
+        for _ in 0..6 {
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE)
+                .unwrap();
+        }
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::LOW_LATENCY),
+            Ok(Channel::Discarded)
+        );
+        assert_eq!(ep.unreliable_dropped, 1);
+        // Reliable still queues until the hard limit.
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE),
+            Ok(Channel::Tcp)
+        );
+        while ep
+            .pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE)
+            .is_ok()
+        {}
+        assert!(ep.tx.pending_len() <= 1000);
+    }
+
+    #[test]
+    fn description_count_is_limited() {
+        let mut ep = Endpoint::new(true, "peer".into(), 1000);
+        ep.max_names = 2;
+        assert!(ep.note_description(true));
+        assert!(ep.note_description(true));
+        assert!(ep.note_description(false));
+        assert!(!ep.note_description(true));
     }
 }

@@ -105,6 +105,12 @@ pub struct Limits {
     pub connect_timeout: Duration,
     /// Messages taken from one peer before others get their turn in a mainloop pass.
     pub max_messages_per_peer_per_loop: usize,
+    /// Largest message payload accepted from a peer; a peer that sends a larger one is dropped
+    /// with a notice. Default: the C++ receive limit (64008 padded bytes).
+    pub max_message_payload: usize,
+    /// Sender names, and separately type names, one peer may describe (C++: 2000 each); a peer
+    /// describing more is dropped with a notice.
+    pub max_names_per_peer: usize,
 }
 
 impl Default for Limits {
@@ -116,6 +122,8 @@ impl Default for Limits {
             no_answer_warning: Duration::from_secs(3),
             connect_timeout: Duration::from_secs(5),
             max_messages_per_peer_per_loop: 100_000,
+            max_message_payload: wire::MAX_TCP_PADDED_PAYLOAD,
+            max_names_per_peer: wire::MAX_IDS,
         }
     }
 }

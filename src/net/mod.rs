@@ -12,7 +12,9 @@ use std::time::{Duration, Instant};
 use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Events, Interest, Poll, Token};
 
-use crate::connection::endpoint::{DatagramInbox, Endpoint, Phase, INBOX_SLOT, INBOX_SLOTS};
+use crate::connection::endpoint::{
+    Channel, DatagramInbox, Endpoint, Phase, INBOX_SLOT, INBOX_SLOTS,
+};
 use crate::connection::names::Names;
 use crate::connection::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 use crate::error::Error;
@@ -717,6 +719,8 @@ impl Core {
             );
         }
         let mut ep = Endpoint::new(tcp_only, peer, self.limits.max_pending_output);
+        ep.max_payload = self.limits.max_message_payload;
+        ep.max_names = self.limits.max_names_per_peer;
         if let Kind::Client(c) = &self.kind {
             ep.seq_tcp = c.seq.0;
             ep.seq_udp = c.seq.1;
@@ -1227,6 +1231,20 @@ impl Core {
         payload: &[u8],
         tcp_only: bool,
     ) -> Option<Delivery> {
+        if payload.len() > ep.max_payload {
+            queue.push_back(Delivery::Notice(Notice {
+                severity: Severity::Warning,
+                text: format!(
+                    "{} sent a {}-byte message; the limit is {} bytes \
+                     (Limits::max_message_payload)",
+                    ep.peer,
+                    payload.len(),
+                    ep.max_payload
+                ),
+            }));
+            ep.protocol_error = true;
+            return None;
+        }
         match h.type_id {
             system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION => {
                 let is_sender = h.type_id == system::SENDER_DESCRIPTION;
@@ -1246,6 +1264,26 @@ impl Core {
                 } else {
                     &mut names.types
                 };
+                let remote_table = if is_sender {
+                    &ep.remote_senders
+                } else {
+                    &ep.remote_types
+                };
+                let rebinds = !matches!(table.get(name),
+                    Some(l) if Endpoint::lookup(remote_table, h.sender) == l);
+                if rebinds && !ep.note_description(is_sender) {
+                    queue.push_back(Delivery::Notice(Notice {
+                        severity: Severity::Warning,
+                        text: format!(
+                            "{} described more than {} {} names (Limits::max_names_per_peer)",
+                            ep.peer,
+                            ep.max_names,
+                            if is_sender { "sender" } else { "type" }
+                        ),
+                    }));
+                    ep.protocol_error = true;
+                    return None;
+                }
                 let (local, new) = match table.register(name) {
                     Ok(r) => r,
                     Err(e) => {
@@ -1492,15 +1530,28 @@ impl Core {
     ) {
         self.log_outgoing_message(type_id, sender, time, payload);
         let mut overflow = None;
+        let mut shedding = None;
         for (i, p) in self.peers.iter_mut().enumerate() {
             if let Some(p) = p {
-                if p.ep
-                    .pack(time, sender, type_id, payload, class_of_service)
-                    .is_err()
-                {
-                    overflow = Some(i);
+                match p.ep.pack(time, sender, type_id, payload, class_of_service) {
+                    Err(_) => overflow = Some(i),
+                    // Say so once per peer, when it first sheds unreliable traffic.
+                    Ok(Channel::Discarded) if p.ep.unreliable_dropped == 1 => {
+                        shedding = Some((p.ep.peer.clone(), p.ep.tx.pending_len()));
+                    }
+                    Ok(_) => {}
                 }
             }
+        }
+        if let Some((who, pending)) = shedding {
+            self.notice(
+                Severity::Warning,
+                format!(
+                    "{who} is falling behind ({pending} bytes of output pending): dropping \
+                     its unreliable messages while the backlog exceeds half of \
+                     Limits::max_pending_output"
+                ),
+            );
         }
         if let Some(i) = overflow {
             // Rare path: one slow peer at a time is enough to handle per message.
