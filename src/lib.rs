@@ -38,6 +38,7 @@ pub mod connection;
 pub mod devices;
 pub mod dispatch;
 mod error;
+pub mod layered;
 pub mod log;
 pub mod name;
 mod net;
@@ -57,5 +58,6 @@ pub use devices::tracker::{
 pub use devices::ServerDevice;
 pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
+pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
 pub use time::TimeVal;
