@@ -40,6 +40,7 @@ pub mod dispatch;
 mod error;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod layered;
 pub mod log;
 pub mod name;
 mod net;
@@ -59,5 +60,6 @@ pub use devices::tracker::{
 pub use devices::ServerDevice;
 pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
+pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
 pub use time::TimeVal;

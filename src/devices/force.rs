@@ -1,7 +1,13 @@
-//! ForceDevice (DEVICES.md §8), the core subset: the server sends Force, SCP and Force_Error;
-//! clients send planes and force fields, which the server hands to callbacks. The trimesh,
-//! scene, constraint and custom-effect messages are registered (C++ order) but not yet handled.
+//! ForceDevice (DEVICES.md §8): the server sends Force, SCP and Force_Error; clients send
+//! planes, force fields, trimesh / scene requests, constraints and custom effects, which the
+//! server hands to callbacks ([`ForceDeviceServer::on_plane`], [`ForceDeviceServer::on_request`],
+//! [`ForceDeviceServer::on_custom_effect`]).
+//!
+//! The remote's constraint API behaves as the 07.35 C++ remote (built with
+//! `FD_SPRINGS_AS_FIELDS`): a constraint is turned into a force field and sent as one; the
+//! `constraint_*` messages themselves can still be sent with [`ForceDeviceRemote::send_request`].
 
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use super::base::{self, BaseIds, PingCycle};
@@ -13,7 +19,13 @@ use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::force as codec;
 
-pub use codec::{ForceField, Plane, Plane2};
+pub use codec::{
+    AddObject, ConstraintInt, ConstraintKSpring, ConstraintVec3, CustomEffect, ForceField,
+    HapticScale, IndexedVec3, ObjectId, ObjectOrientation, ObjectVec3, Origin, Plane, Plane2,
+    RemoveTriangle, SetObjectIsTouchable, SetTriangle, SetTrimeshType, TransformTrimesh,
+    UpdateTrimeshChanges, CONSTRAINT_MODE_LINE, CONSTRAINT_MODE_NONE, CONSTRAINT_MODE_PLANE,
+    CONSTRAINT_MODE_POINT, STOP_EFFECT_ID, TRIMESH_GHOST, TRIMESH_HCOLLIDE,
+};
 
 /// Ids of all 35 ForceDevice types, in C++ registration order (index = row − 1 of §8.1).
 #[derive(Clone, Copy, Debug)]
@@ -45,6 +57,209 @@ impl ForceIds {
     }
     fn error(&self) -> TypeId {
         self.0[25]
+    }
+    fn custom_effect(&self) -> TypeId {
+        self.0[34]
+    }
+}
+
+/// Longest fixed request payload (`transformTrimesh`).
+const REQUEST_MAX: usize = TransformTrimesh::LEN;
+
+macro_rules! force_requests {
+    ($($(#[$doc:meta])* $v:ident($t:ty) = $idx:expr,)*) => {
+        /// A client-to-server ForceDevice request other than Plane, Plane2, Force_Field and
+        /// Custom Effect: trimesh, scene and constraint messages (DEVICES.md §8.3).
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum ForceRequest {
+            $($(#[$doc])* $v($t),)*
+        }
+
+        impl ForceRequest {
+            /// Indices into [`ForceIds`] of every request type.
+            const INDICES: &'static [usize] = &[$($idx),*];
+
+            /// Index of this request's type in [`ForceIds`] (table row − 1 of DEVICES.md §8.1).
+            pub fn type_index(&self) -> usize {
+                match self {
+                    $(ForceRequest::$v(_) => $idx,)*
+                }
+            }
+
+            /// The VRPN type name of this request.
+            pub fn type_name(&self) -> &'static str {
+                codec::TYPE_NAMES[self.type_index()]
+            }
+
+            fn encode(&self, out: &mut [u8; REQUEST_MAX]) -> usize {
+                match self {
+                    $(ForceRequest::$v(p) => p.encode(out),)*
+                }
+            }
+
+            fn decode(index: usize, buf: &[u8]) -> Option<ForceRequest> {
+                $(if index == $idx {
+                    return <$t>::decode(buf).ok().map(ForceRequest::$v);
+                })*
+                None
+            }
+        }
+    };
+}
+
+force_requests! {
+    /// `addObject`: object and parent (-1 = root).
+    AddObject(AddObject) = 4,
+    /// `addObjectExScene`.
+    AddObjectExScene(ObjectId) = 5,
+    /// `moveToParent`: object and new parent.
+    MoveToParent(AddObject) = 6,
+    /// `setObjectPosition`.
+    SetObjectPosition(ObjectVec3) = 7,
+    /// `setObjectOrientation`: axis and angle.
+    SetObjectOrientation(ObjectOrientation) = 8,
+    /// `setObjectScale`.
+    SetObjectScale(ObjectVec3) = 9,
+    /// `removeObject`.
+    RemoveObject(ObjectId) = 10,
+    /// `setVertex`.
+    SetVertex(IndexedVec3) = 11,
+    /// `setNormal`.
+    SetNormal(IndexedVec3) = 12,
+    /// `setTriangle`.
+    SetTriangle(SetTriangle) = 13,
+    /// `removeTriangle`.
+    RemoveTriangle(RemoveTriangle) = 14,
+    /// `updateTrimeshChanges`: material (static friction before dynamic).
+    UpdateTrimeshChanges(UpdateTrimeshChanges) = 15,
+    /// `transformTrimesh`: a row-major 4×4 matrix.
+    TransformTrimesh(TransformTrimesh) = 16,
+    /// `setTrimeshType`: ghost or hcollide.
+    SetTrimeshType(SetTrimeshType) = 17,
+    /// `clearTrimesh`.
+    ClearTrimesh(ObjectId) = 18,
+    /// `setHapticOrigin`.
+    SetHapticOrigin(Origin) = 19,
+    /// `setHapticScale`.
+    SetHapticScale(HapticScale) = 20,
+    /// `setSceneOrigin`.
+    SetSceneOrigin(Origin) = 21,
+    /// `setObjectIsTouchable`.
+    SetObjectIsTouchable(SetObjectIsTouchable) = 23,
+    /// `constraint_enable`: 0 disables.
+    ConstraintEnable(ConstraintInt) = 26,
+    /// `constraint_mode`: one of the `CONSTRAINT_MODE_*` values.
+    ConstraintMode(ConstraintInt) = 27,
+    /// `constraint_point`.
+    ConstraintPoint(ConstraintVec3) = 28,
+    /// `constraint_linept`.
+    ConstraintLinePoint(ConstraintVec3) = 29,
+    /// `constraint_linedir`.
+    ConstraintLineDirection(ConstraintVec3) = 30,
+    /// `constraint_plpt`.
+    ConstraintPlanePoint(ConstraintVec3) = 31,
+    /// `constraint_plnorm`.
+    ConstraintPlaneNormal(ConstraintVec3) = 32,
+    /// `constraint_KSpring`.
+    ConstraintKSpring(ConstraintKSpring) = 33,
+}
+
+/// A request as the server received it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForceRequestMsg {
+    /// Time the client stamped on it.
+    pub time: TimeVal,
+    /// The request.
+    pub request: ForceRequest,
+}
+
+/// A custom effect as the server received it (parameters borrowed from the message).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CustomEffectMsg<'a> {
+    /// Time the client stamped on it.
+    pub time: TimeVal,
+    /// Effect id ([`STOP_EFFECT_ID`] stops) and parameters.
+    pub effect: CustomEffect<'a>,
+}
+
+type EffectCallback = Rc<RefCell<dyn for<'a> FnMut(&CustomEffectMsg<'a>)>>;
+
+/// The remote's constraint (C++ `vrpn_ForceDevice_Remote` constraint members).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Constraint {
+    /// Whether the constraint's field is being sent.
+    pub enabled: bool,
+    /// One of the `CONSTRAINT_MODE_*` values.
+    pub mode: i32,
+    /// Point of a point constraint.
+    pub point: [f32; 3],
+    /// A point on the line of a line constraint.
+    pub line_point: [f32; 3],
+    /// Direction of the line.
+    pub line_direction: [f32; 3],
+    /// A point on the plane of a plane constraint.
+    pub plane_point: [f32; 3],
+    /// Normal of the plane.
+    pub plane_normal: [f32; 3],
+    /// Spring constant.
+    pub kspring: f32,
+}
+
+impl Default for Constraint {
+    /// Disabled, point mode, everything else zero.
+    fn default() -> Self {
+        Constraint {
+            enabled: false,
+            mode: CONSTRAINT_MODE_POINT,
+            point: [0.0; 3],
+            line_point: [0.0; 3],
+            line_direction: [0.0; 3],
+            plane_point: [0.0; 3],
+            plane_normal: [0.0; 3],
+            kspring: 0.0,
+        }
+    }
+}
+
+fn unit(v: [f32; 3]) -> [f64; 3] {
+    let v = v.map(f64::from);
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let n = if n == 0.0 { 1.0 } else { n };
+    v.map(|x| x / n)
+}
+
+impl Constraint {
+    /// The force field that realises this constraint (DEVICES.md §8.3), starting from `prev`
+    /// (kept unchanged in mode NONE).
+    pub fn field(&self, prev: &ForceField) -> ForceField {
+        let k = self.kspring as f64;
+        let (origin, j): ([f32; 3], [[f64; 3]; 3]) = match self.mode {
+            CONSTRAINT_MODE_POINT => (self.point, [[-k, 0.0, 0.0], [0.0, -k, 0.0], [0.0, 0.0, -k]]),
+            CONSTRAINT_MODE_PLANE => {
+                let n = unit(self.plane_normal);
+                (
+                    self.plane_point,
+                    [0, 1, 2].map(|r| [0, 1, 2].map(|c| -k * n[r] * n[c])),
+                )
+            }
+            CONSTRAINT_MODE_LINE => {
+                let d = self.line_direction;
+                // C++ quirk: the X and Y components of the direction are mirrored.
+                let e = unit([-d[0], -d[1], d[2]]);
+                let id = |r: usize, c: usize| if r == c { 1.0 } else { 0.0 };
+                (
+                    self.line_point,
+                    [0, 1, 2].map(|r| [0, 1, 2].map(|c| -k * (id(r, c) - e[r] * e[c]))),
+                )
+            }
+            _ => return *prev,
+        };
+        ForceField {
+            origin,
+            force: [0.0; 3],
+            jacobian: j.map(|row| row.map(|x| x as f32)),
+            radius: 100.0,
+        }
     }
 }
 
@@ -92,6 +307,9 @@ pub struct ForceDeviceRemote {
     ping: PingCycle,
     shared: Rc<RemoteShared>,
     handlers: Vec<HandlerId>,
+    constraint: Cell<Constraint>,
+    constraint_field: Cell<ForceField>,
+    effect_buf: RefCell<Vec<u8>>,
 }
 
 impl ForceDeviceRemote {
@@ -146,6 +364,9 @@ impl ForceDeviceRemote {
             ping,
             shared,
             handlers: vec![h1, h2, h3],
+            constraint: Cell::new(Constraint::default()),
+            constraint_field: Cell::new(ForceField::default()),
+            effect_buf: RefCell::new(Vec::new()),
         })
     }
 
@@ -221,6 +442,138 @@ impl ForceDeviceRemote {
     }
 }
 
+impl ForceDeviceRemote {
+    /// Sends a trimesh, scene or constraint request RELIABLE, as the C++ remote does.
+    pub fn send_request(&self, request: &ForceRequest) -> Result<(), Error> {
+        let mut buf = [0u8; REQUEST_MAX];
+        let len = request.encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.0[request.type_index()],
+            self.base.sender,
+            &buf[..len],
+            class::RELIABLE,
+        )
+    }
+
+    /// Sends a custom effect RELIABLE (C++ `setCustomEffect` + `startEffect`).
+    pub fn send_custom_effect(&self, effect_id: u32, params: &[f32]) -> Result<(), Error> {
+        let mut buf = self.effect_buf.borrow_mut();
+        let len = CustomEffect::len_for(params.len());
+        if buf.len() < len {
+            buf.resize(len, 0); // grows to the largest effect sent, then reused
+        }
+        codec::encode_custom_effect(effect_id, params, &mut buf[..len]);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.custom_effect(),
+            self.base.sender,
+            &buf[..len],
+            class::RELIABLE,
+        )
+    }
+
+    /// Stops the custom effect: id 0xFFFFFFFF with no parameters (C++ `stopEffect`).
+    pub fn stop_effect(&self) -> Result<(), Error> {
+        self.send_custom_effect(STOP_EFFECT_ID, &[])
+    }
+
+    /// Stops the force field: all 16 floats zero, RELIABLE (C++ `stopForceField`).
+    pub fn stop_force_field(&self) -> Result<(), Error> {
+        let mut buf = [0u8; ForceField::LEN];
+        ForceField::default().encode(&mut buf);
+        self.conn.pack_message(
+            TimeVal::now(),
+            self.ids.force_field(),
+            self.base.sender,
+            &buf,
+            class::RELIABLE,
+        )
+    }
+
+    /// The constraint as last set.
+    pub fn constraint(&self) -> Constraint {
+        self.constraint.get()
+    }
+
+    /// Enables (1) or disables (0) the constraint (C++ `enableConstraint`): enabling sends the
+    /// constraint's force field, disabling stops the field; setting the current value again
+    /// sends nothing; other values are refused.
+    pub fn enable_constraint(&self, enable: i32) -> Result<(), Error> {
+        let on = match enable {
+            0 => false,
+            1 => true,
+            _ => return Err(Error::Unsupported("constraint enable must be 0 or 1")),
+        };
+        let mut c = self.constraint.get();
+        if c.enabled == on {
+            return Ok(());
+        }
+        c.enabled = on;
+        self.constraint.set(c);
+        if on {
+            self.send_constraint_field()
+        } else {
+            self.stop_force_field()
+        }
+    }
+
+    fn send_constraint_field(&self) -> Result<(), Error> {
+        let field = self.constraint.get().field(&self.constraint_field.get());
+        self.constraint_field.set(field);
+        self.send_force_field(&field)
+    }
+
+    fn update_constraint(&self, f: impl FnOnce(&mut Constraint)) -> Result<(), Error> {
+        let mut c = self.constraint.get();
+        f(&mut c);
+        self.constraint.set(c);
+        // The field is recomputed on every change and sent only while enabled.
+        let field = c.field(&self.constraint_field.get());
+        self.constraint_field.set(field);
+        if c.enabled {
+            self.send_force_field(&field)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Sets the constraint mode (`CONSTRAINT_MODE_*`).
+    pub fn set_constraint_mode(&self, mode: i32) -> Result<(), Error> {
+        self.update_constraint(|c| c.mode = mode)
+    }
+
+    /// Sets the point of a point constraint.
+    pub fn set_constraint_point(&self, p: [f32; 3]) -> Result<(), Error> {
+        self.update_constraint(|c| c.point = p)
+    }
+
+    /// Sets a point on the line of a line constraint.
+    pub fn set_constraint_line_point(&self, p: [f32; 3]) -> Result<(), Error> {
+        self.update_constraint(|c| c.line_point = p)
+    }
+
+    /// Sets the direction of the line of a line constraint.
+    pub fn set_constraint_line_direction(&self, d: [f32; 3]) -> Result<(), Error> {
+        self.update_constraint(|c| c.line_direction = d)
+    }
+
+    /// Sets a point on the plane of a plane constraint.
+    pub fn set_constraint_plane_point(&self, p: [f32; 3]) -> Result<(), Error> {
+        self.update_constraint(|c| c.plane_point = p)
+    }
+
+    /// Sets the normal of the plane of a plane constraint.
+    pub fn set_constraint_plane_normal(&self, n: [f32; 3]) -> Result<(), Error> {
+        self.update_constraint(|c| c.plane_normal = n)
+    }
+
+    /// Sets the constraint's spring constant.
+    pub fn set_constraint_kspring(&self, k: f32) -> Result<(), Error> {
+        self.update_constraint(|c| c.kspring = k)
+    }
+}
+
 impl Drop for ForceDeviceRemote {
     fn drop(&mut self) {
         for h in self.handlers.drain(..) {
@@ -234,6 +587,25 @@ struct ServerShared {
     plane: CallbackList<(TimeVal, Plane)>,
     plane2: CallbackList<(TimeVal, Plane2)>,
     field: CallbackList<(TimeVal, ForceField)>,
+    request: CallbackList<ForceRequestMsg>,
+    effects: RefCell<Vec<EffectCallback>>,
+    bad_messages: Cell<u64>,
+}
+
+impl ServerShared {
+    fn call_effects(&self, msg: &CustomEffectMsg<'_>) {
+        let mut i = 0;
+        loop {
+            let cb = match self.effects.borrow().get(i) {
+                Some(cb) => cb.clone(),
+                None => break,
+            };
+            if let Ok(mut f) = cb.try_borrow_mut() {
+                f(msg);
+            }
+            i += 1;
+        }
+    }
 }
 
 /// Server half of a force device: reports force, SCP and errors; hands client planes and
@@ -272,6 +644,30 @@ impl ForceDeviceServer {
                 s.field.call(&(m.time, p));
             }
         });
+        for &index in ForceRequest::INDICES {
+            let s = shared.clone();
+            conn.register_handler(ids.0[index], only, move |m| {
+                match ForceRequest::decode(index, m.payload) {
+                    Some(request) => s.request.call(&ForceRequestMsg {
+                        time: m.time,
+                        request,
+                    }),
+                    None => s.bad_messages.set(s.bad_messages.get() + 1),
+                }
+            });
+        }
+        let s = shared.clone();
+        conn.register_handler(
+            ids.custom_effect(),
+            only,
+            move |m| match CustomEffect::decode(m.payload) {
+                Ok(effect) => s.call_effects(&CustomEffectMsg {
+                    time: m.time,
+                    effect,
+                }),
+                Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
+            },
+        );
         Ok(ForceDeviceServer {
             conn: conn.clone(),
             ids,
@@ -293,6 +689,24 @@ impl ForceDeviceServer {
     /// Calls `f` for every force field a client sends.
     pub fn on_force_field(&self, f: impl FnMut(&(TimeVal, ForceField)) + 'static) -> HandlerId {
         self.shared.field.add(f)
+    }
+
+    /// Calls `f` for every trimesh, scene or constraint request a client sends.
+    pub fn on_request(&self, f: impl FnMut(&ForceRequestMsg) + 'static) -> HandlerId {
+        self.shared.request.add(f)
+    }
+
+    /// Calls `f` for every custom effect a client sends (including stops).
+    pub fn on_custom_effect(&self, f: impl for<'a> FnMut(&CustomEffectMsg<'a>) + 'static) {
+        self.shared
+            .effects
+            .borrow_mut()
+            .push(Rc::new(RefCell::new(f)));
+    }
+
+    /// Requests and effects that could not be decoded and were ignored.
+    pub fn bad_messages(&self) -> u64 {
+        self.shared.bad_messages.get()
     }
 
     /// Sends a force (LOW_LATENCY).

@@ -8,6 +8,7 @@ use crate::devices::dial::DialExample;
 use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
+use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
 
 /// Builds the devices `entries` describe on `conn`, in file order.
 ///
@@ -77,6 +78,8 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Box<dyn ServerDev
         DeviceConfig::TextExample(c) => Ok(Box::new(
             TextExample::new(&c.name, conn, c.period as f64, &c.message).map_err(at)?,
         )),
+        DeviceConfig::AnalogFly(c) => Ok(Box::new(TrackerAnalogFly::new(c, conn).map_err(at)?)),
+        DeviceConfig::ButtonFly(c) => Ok(Box::new(TrackerButtonFly::new(c, conn).map_err(at)?)),
         DeviceConfig::Unknown { .. } => Err(entry
             .unknown_error()
             .map(|e| e.to_string())
