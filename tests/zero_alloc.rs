@@ -296,3 +296,81 @@ fn udp_reports_do_not_allocate() {
     }
     assert_eq!(allocs, 0, "allocations on the UDP path");
 }
+
+#[test]
+fn every_device_type_in_process_does_not_allocate() {
+    use vrpn::devices::analog::{AnalogRemote, AnalogServer};
+    use vrpn::devices::button::{ButtonRemote, ButtonServer};
+    use vrpn::devices::dial::{DialRemote, DialServer};
+    use vrpn::devices::text_device::{TextReceiver, TextSender};
+    let conn = Connection::new_loopback();
+    let buttons = ButtonServer::new("Buttons", &conn, 8).unwrap();
+    let mut analog = AnalogServer::new("Analog", &conn, 16).unwrap();
+    let mut dial = DialServer::new("Dial", &conn, 2).unwrap();
+    let text = TextSender::new("Text", &conn).unwrap();
+    let (b, a, d, t) = (counter(), counter(), counter(), counter());
+    let br = ButtonRemote::on_connection("Buttons", &conn).unwrap();
+    let mut bump_b = bump(&b);
+    br.on_change(move |_| bump_b());
+    let ar = AnalogRemote::on_connection("Analog", &conn).unwrap();
+    let mut bump_a = bump(&a);
+    ar.on_report(move |_| bump_a());
+    let dr = DialRemote::on_connection("Dial", &conn).unwrap();
+    let mut bump_d = bump(&d);
+    dr.on_update(move |_| bump_d());
+    let tr = TextReceiver::on_connection("Text", &conn).unwrap();
+    let mut bump_t = bump(&t);
+    tr.on_message(move |_| bump_t());
+    let mut round = |i: u64| {
+        buttons.set_button((i % 8) as usize, (i / 8) % 2 == 0);
+        buttons.report_changes();
+        analog.set_channel((i % 16) as usize, i as f64);
+        analog.report(None).unwrap();
+        dial.add_rotation((i % 2) as usize, 0.25);
+        dial.report_changes();
+        text.send_message("status ok", vrpn::TextSeverity::Normal, 0, None)
+            .unwrap();
+        conn.mainloop().unwrap();
+    };
+    for i in 0..100 {
+        round(i);
+    }
+    let allocs = allocations_in(|| {
+        for i in 100..100 + N {
+            round(i);
+        }
+    });
+    assert_eq!(
+        allocs, 0,
+        "allocations while sending and dispatching every type"
+    );
+    assert!(b.get() >= N && a.get() >= N + 100 && d.get() >= N && t.get() >= N + 100);
+}
+
+#[test]
+fn log_replay_does_not_allocate_per_message() {
+    let path = format!(
+        "{}/tests/fixtures/golden/tracker_udp_lob.out.vrpn",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let conn = Connection::replay_file(&path).unwrap();
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    let n = counter();
+    let mut bump_n = bump(&n);
+    tracker.on_pose(move |_| bump_n());
+    let r = conn.replay().unwrap();
+    // The log describes five names at 0.73 s (echoes of a client's names): registering names
+    // allocates, so measure from 1 s on, once every name is known.
+    r.play_to_time(1.0);
+    let before = n.get();
+    let allocs = allocations_in(|| {
+        r.play_to_time(r.length_secs() + 1.0);
+    });
+    assert_eq!(allocs, 0, "allocations while replaying");
+    assert_eq!(n.get(), 410);
+    assert!(
+        n.get() - before > 250,
+        "{} reports measured",
+        n.get() - before
+    );
+}
