@@ -260,7 +260,7 @@ impl Replay {
     }
 
     /// Moves to `elapsed` seconds after the first message without delivering user messages;
-    /// the caller feeds the system entries passed over ([`Replay::skip_due`]) so descriptions
+    /// the connection feeds the system entries passed over through its id tables, so descriptions
     /// are not lost (C++ loses them). Returns whether the target lies within the log.
     pub fn jump_to_time(&mut self, elapsed: f64) -> bool {
         let target = self.base_time().plus_secs(elapsed);
