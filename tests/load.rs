@@ -3,8 +3,9 @@
 //! server RSS bounded and its CPU reported. Then many connect/disconnect cycles against one
 //! server: its open descriptors return to the baseline and its RSS does not grow.
 //!
-//! Defaults keep the run short on a 2-core CI machine; the full figures of docs/ROBUSTNESS.md
-//! come from `VRPN_LOAD_CLIENTS=64 VRPN_LOAD_SECONDS=3 VRPN_CHURN_CYCLES=1000`.
+//! Optimised builds (CI runs `cargo test --release`) use the full figures: 64 clients for 3 s
+//! and 1000 connect/disconnect cycles; debug builds use 32 clients for 2 s. Override with
+//! `VRPN_LOAD_CLIENTS`, `VRPN_LOAD_SECONDS`, `VRPN_CHURN_CYCLES`.
 
 mod common;
 
@@ -39,8 +40,11 @@ struct Stats {
 #[test]
 fn many_clients_receive_every_report() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let clients: usize = env_or("VRPN_LOAD_CLIENTS", 32);
-    let secs: f64 = env_or("VRPN_LOAD_SECONDS", 2.0);
+    // The full figures (64 clients, 3 s) in optimised builds, which is how CI runs the suite;
+    // a debug build's single test thread cannot read 64 streams at 1 kHz.
+    let full = !cfg!(debug_assertions);
+    let clients: usize = env_or("VRPN_LOAD_CLIENTS", if full { 64 } else { 32 });
+    let secs: f64 = env_or("VRPN_LOAD_SECONDS", if full { 3.0 } else { 2.0 });
     let server = start_server("vrpn_Tracker_NULL Tracker0 8 1000\n", 0);
     let rss_idle = rss_kb(server.pid);
     let window = Rc::new(RefCell::new(None::<(TimeVal, TimeVal)>));

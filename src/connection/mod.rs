@@ -555,6 +555,19 @@ impl Connection {
         self.inner.core.borrow_mut().poll_io(Some(timeout))
     }
 
+    /// Blocks until a socket is ready, `deadline` passes (woken precisely, not on a
+    /// millisecond grid), or `max` elapses. Dispatches nothing: call
+    /// [`mainloop`](Self::mainloop) next. This is how a server sleeps until its next device
+    /// report without spinning a core.
+    pub fn wait_until(&self, deadline: Option<Instant>, max: Duration) -> Result<bool, Error> {
+        let mut core = self.inner.core.borrow_mut();
+        let deadline = match (deadline, core.next_deadline()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        core.wait_until(deadline, max)
+    }
+
     /// True once since the last call if data arrived on any socket (for busy-poll windows).
     pub fn take_activity(&self) -> bool {
         std::mem::take(&mut self.inner.core.borrow_mut().activity)

@@ -27,6 +27,8 @@ const SERVER_TCP: Token = Token(0);
 const SERVER_UDP: Token = Token(1);
 const CLIENT_LISTEN: Token = Token(2);
 const CLIENT_LOB: Token = Token(3);
+/// The timerfd that wakes the poll at a device deadline with sub-millisecond precision.
+const TIMER: Token = Token(4);
 const PEER_BASE: usize = 16;
 const TOK_TCP: usize = 0;
 const TOK_UDP_IN: usize = 1;
@@ -145,6 +147,61 @@ pub(crate) struct Core {
     /// `vrpn_server -li`: file name to which `-N` is added for the N-th client.
     log_in_template: Option<(String, u32)>,
     log_failed: bool,
+    /// Precise wake-ups (epoll timeouts are whole milliseconds, rounded up).
+    timer: Option<Timer>,
+}
+
+/// A one-shot monotonic timer in the poll set (Linux timerfd).
+#[cfg(any(target_os = "linux", target_os = "android"))]
+struct Timer(nix::sys::timerfd::TimerFd);
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+struct Timer;
+
+#[cfg(any(target_os = "linux", target_os = "android"))]
+impl Timer {
+    fn new(poll: &Poll) -> Option<Timer> {
+        use nix::sys::timerfd::{ClockId, TimerFd, TimerFlags};
+        use std::os::fd::AsRawFd;
+        let fd = TimerFd::new(ClockId::CLOCK_MONOTONIC, TimerFlags::TFD_NONBLOCK).ok()?;
+        poll.registry()
+            .register(
+                &mut mio::unix::SourceFd(&fd.as_raw_fd()),
+                TIMER,
+                Interest::READABLE,
+            )
+            .ok()?;
+        Some(Timer(fd))
+    }
+
+    /// Fires once after `d`; false if the timer cannot be set.
+    fn arm(&self, d: Duration) -> bool {
+        use nix::sys::time::TimeSpec;
+        use nix::sys::timerfd::{Expiration, TimerSetTimeFlags};
+        let d = d.max(Duration::from_nanos(1));
+        self.0
+            .set(
+                Expiration::OneShot(TimeSpec::from_duration(d)),
+                TimerSetTimeFlags::empty(),
+            )
+            .is_ok()
+    }
+
+    fn clear(&self) {
+        use std::os::fd::AsRawFd;
+        let _ = nix::unistd::read(self.0.as_raw_fd(), &mut [0u8; 8]);
+    }
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+impl Timer {
+    fn new(_: &Poll) -> Option<Timer> {
+        None
+    }
+    fn arm(&self, _: Duration) -> bool {
+        false
+    }
+    fn clear(&self) {}
 }
 
 fn would_block(e: &io::Error) -> bool {
@@ -204,7 +261,33 @@ impl Core {
             log_out: None,
             log_in_template: None,
             log_failed: false,
+            timer: None,
         }
+    }
+
+    /// Waits for socket readiness until `deadline` (precisely, through a timerfd) or at most
+    /// `max`. Returns whether a socket became ready.
+    pub(crate) fn wait_until(
+        &mut self,
+        deadline: Option<Instant>,
+        max: Duration,
+    ) -> Result<bool, Error> {
+        let mut timeout = max;
+        if let Some(d) = deadline {
+            let until = d.saturating_duration_since(Instant::now());
+            if until.is_zero() {
+                return self.poll_io(Some(Duration::ZERO));
+            }
+            if until < max {
+                if self.timer.is_none() {
+                    self.timer = self.poll.as_ref().and_then(Timer::new);
+                }
+                let armed = self.timer.as_ref().is_some_and(|t| t.arm(until));
+                // Without a timer, fall back to the poll's millisecond timeout.
+                timeout = if armed { max } else { until };
+            }
+        }
+        self.poll_io(Some(timeout))
     }
 
     /// A replay of the log at `path`.
@@ -532,13 +615,18 @@ impl Core {
         let mut any = false;
         for ev in self.events.iter() {
             // Only incoming data counts as activity: write-space events follow every send.
-            any |= ev.is_readable();
+            any |= ev.is_readable() && ev.token() != TIMER;
             let t = ev.token().0;
             match (&mut self.kind, t) {
                 (Kind::Server(s), 0) => s.tcp_readable = true,
                 (Kind::Server(s), 1) => s.udp_readable = true,
                 (Kind::Client(c), 2) => c.listener_readable = true,
                 (Kind::Client(c), 3) => c.lob_readable = true,
+                (_, 4) => {
+                    if let Some(t) = &self.timer {
+                        t.clear();
+                    }
+                }
                 (_, t) if t >= PEER_BASE => {
                     let slot = (t - PEER_BASE) / 4;
                     if let Some(Some(p)) = self.peers.get_mut(slot) {

@@ -85,13 +85,8 @@ impl ServerLoop {
             self.conn.wait(Duration::ZERO)?;
             return Ok(());
         }
-        let mut timeout = max_block;
-        for d in &self.devices {
-            if let Some(deadline) = d.next_deadline() {
-                timeout = timeout.min(deadline.saturating_duration_since(now));
-            }
-        }
-        if !timeout.is_zero() && self.conn.wait(timeout)? {
+        let deadline = self.devices.iter().filter_map(|d| d.next_deadline()).min();
+        if self.conn.wait_until(deadline, max_block)? {
             self.last_activity = Instant::now();
         }
         Ok(())
