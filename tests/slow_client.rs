@@ -9,14 +9,20 @@ use std::cell::{Cell, RefCell};
 use std::io::Write;
 use std::net::{Ipv4Addr, TcpStream};
 use std::rc::Rc;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use common::*;
 use vrpn::wire::{class, Cookie};
 use vrpn::{Connection, Limits, Notice, ServerDevice, TimeVal, TrackerNull, TrackerRemote};
 
+/// The two tests run one at a time: one pushes megabytes through the machine, the other
+/// measures latency, and on 2 cores the first would distort the second.
+static SERIAL: Mutex<()> = Mutex::new(());
+
 #[test]
 fn stalled_client_sheds_unreliable_then_is_dropped() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let limit = 256 * 1024;
     let server = Connection::server_with_limits(
         Some(Ipv4Addr::LOCALHOST),
@@ -131,6 +137,7 @@ fn stalled_client_sheds_unreliable_then_is_dropped() {
 
 #[test]
 fn stalled_client_does_not_delay_others() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let server = start_server("vrpn_Tracker_NULL Tracker0 8 1000\n", 0);
     let conn = Connection::client("127.0.0.1", server.port, false, Limits::default()).unwrap();
     conn.on_notice(|_| {});

@@ -1671,7 +1671,9 @@ impl Core {
             return;
         }
         let mut failed = None;
-        while p.ep.tx.pending_len() > 0 {
+        // After a WouldBlock, wait for epoll's writable event instead of retrying every pass
+        // (a stalled peer would otherwise cost a failing write per pass).
+        while p.io.tcp_writable && p.ep.tx.pending_len() > 0 {
             match p.io.tcp.write(p.ep.tx.pending()) {
                 Ok(0) => break,
                 Ok(n) => p.ep.tx.consume(n),
