@@ -3,16 +3,16 @@
 //! [`AnalogExample`] our example server (sine waves).
 
 use std::cell::{Cell, RefCell};
+use std::ops::Deref;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
 use super::ServerDevice;
 use crate::connection::Connection;
-use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::dispatch::{CallbackList, HandlerId, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::analog as codec;
@@ -62,28 +62,27 @@ struct RemoteShared {
 
 /// Client half of an analog device: callbacks and the latest channel values.
 pub struct AnalogRemote {
-    conn: Connection,
-    ping: PingCycle,
+    core: RemoteCore,
     shared: Rc<RemoteShared>,
-    device: String,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for AnalogRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl AnalogRemote {
     /// Opens `Device@location` (sharing the connection with other devices at that location).
     pub fn new(name: &str) -> Result<AnalogRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<AnalogRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = AnalogIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, AnalogIds::register)?;
         let shared = Rc::new(RemoteShared {
             report: CallbackList::default(),
             latest: RefCell::new(AnalogReport {
@@ -95,7 +94,7 @@ impl AnalogRemote {
             bad_messages: Cell::new(0),
         });
         let s = shared.clone();
-        let h = conn.register_handler(ids.channel, SenderFilter::Only(sender), move |m| {
+        core.handle(ids.channel, move |m| {
             let r = {
                 let mut l = s.latest.borrow_mut();
                 match codec::decode_channels_into(m.payload, &mut l.channel) {
@@ -113,30 +112,7 @@ impl AnalogRemote {
             s.got.set(true);
             s.report.call(&r);
         });
-        Ok(AnalogRemote {
-            conn: conn.clone(),
-            ping,
-            shared,
-            device: device.to_string(),
-            handlers: vec![h],
-        })
-    }
-
-    /// Services the connection (all devices on it) and this device's ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
-    }
-
-    /// The connection this remote uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-
-    /// The device (sender) name.
-    pub fn device(&self) -> &str {
-        &self.device
+        Ok(AnalogRemote { core, shared })
     }
 
     /// Calls `f` for every channel report.
@@ -174,19 +150,6 @@ impl AnalogRemote {
     pub fn bad_messages(&self) -> u64 {
         self.shared.bad_messages.get()
     }
-
-    /// The ping cycle (server liveness).
-    pub fn ping_cycle(&self) -> &PingCycle {
-        &self.ping
-    }
-}
-
-impl Drop for AnalogRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
-    }
 }
 
 /// Server half of an analog device (C++ `vrpn_Analog_Server`): set channels, then
@@ -204,10 +167,7 @@ pub struct AnalogServer {
 impl AnalogServer {
     /// Registers `device` with `channels` channels (clamped to 128).
     pub fn new(device: &str, conn: &Connection, channels: usize) -> Result<AnalogServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = AnalogIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, AnalogIds::register)?;
         Ok(AnalogServer {
             conn: conn.clone(),
             ids,

@@ -4,14 +4,14 @@
 //! `vrpn_Analog_Output_Callback_Server`).
 
 use std::cell::{Cell, RefCell};
+use std::ops::Deref;
 use std::rc::Rc;
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
 use crate::connection::{Connection, ConnectionEvent};
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::analog::CHANNEL_MAX;
@@ -59,61 +59,46 @@ impl AnalogOutputValues {
 
 /// Client half: sends channel requests, learns the server's channel count.
 pub struct AnalogOutputRemote {
-    conn: Connection,
+    core: RemoteCore,
     ids: AnalogOutputIds,
-    base: BaseIds,
-    ping: PingCycle,
     num: Rc<Cell<i32>>,
     reports: Rc<CallbackList<i32>>,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for AnalogOutputRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl AnalogOutputRemote {
     /// Opens `Device@location`.
     pub fn new(name: &str) -> Result<AnalogOutputRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<AnalogOutputRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = AnalogOutputIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, AnalogOutputIds::register)?;
         let num = Rc::new(Cell::new(CHANNEL_MAX as i32));
         let reports: Rc<CallbackList<i32>> = Rc::new(CallbackList::default());
         let (n, r) = (num.clone(), reports.clone());
-        let h = conn.register_handler(
-            ids.num_channels_report,
-            SenderFilter::Only(sender),
-            move |m| {
-                if let Ok(rep) = codec::NumChannelsReport::decode(m.payload) {
-                    if (0..=CHANNEL_MAX as i32).contains(&rep.num_channels) {
-                        n.set(rep.num_channels);
-                        r.call(&rep.num_channels);
-                    }
+        core.handle(ids.num_channels_report, move |m| {
+            if let Ok(rep) = codec::NumChannelsReport::decode(m.payload) {
+                if (0..=CHANNEL_MAX as i32).contains(&rep.num_channels) {
+                    n.set(rep.num_channels);
+                    r.call(&rep.num_channels);
                 }
-            },
-        );
+            }
+        });
         Ok(AnalogOutputRemote {
-            conn: conn.clone(),
+            core,
             ids,
-            base,
-            ping,
             num,
             reports,
-            handlers: vec![h],
         })
-    }
-
-    /// Services the connection and the ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
     }
 
     /// The server's channel count (128 until it reports).
@@ -130,13 +115,7 @@ impl AnalogOutputRemote {
     pub fn request_change_channel_value(&self, channel: i32, value: f64) -> Result<(), Error> {
         let mut buf = [0u8; codec::ChangeRequest::LEN];
         codec::ChangeRequest::new(channel, value).encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.change_request,
-            self.base.sender,
-            &buf,
-            class::RELIABLE,
-        )
+        self.send(self.ids.change_request, &buf)
     }
 
     /// Asks the server to set channels `0..values.len()` (at most 128, RELIABLE).
@@ -147,26 +126,7 @@ impl AnalogOutputRemote {
         let req = codec::ChangeChannelsRequest::from_slice(values);
         let mut buf = [0u8; 8 + 8 * CHANNEL_MAX];
         let len = req.encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.change_channels_request,
-            self.base.sender,
-            &buf[..len],
-            class::RELIABLE,
-        )
-    }
-
-    /// The connection this remote uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-}
-
-impl Drop for AnalogOutputRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
+        self.send(self.ids.change_channels_request, &buf[..len])
     }
 }
 
@@ -190,10 +150,8 @@ impl AnalogOutputServer {
         conn: &Connection,
         channels: usize,
     ) -> Result<AnalogOutputServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = AnalogOutputIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, AnalogOutputIds::register)?;
+        let sender = base.sender;
         let num = channels.min(CHANNEL_MAX) as i32;
         let shared = Rc::new(ServerShared {
             values: RefCell::new(AnalogOutputValues {

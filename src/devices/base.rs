@@ -1,6 +1,7 @@
 //! What every device shares (C++ `vrpn_BaseClass`): its sender, the text/ping/pong types, the
 //! server's pong answer, the remote's ping cycle with its 3 s warning and 10 s error, and the
-//! default printer of warnings and errors.
+//! default printer of warnings and errors. [`RemoteCore`] bundles what every client half
+//! repeats; [`register_server`] the registration every server half starts with.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashSet;
@@ -9,8 +10,9 @@ use std::time::{Duration, Instant};
 
 use super::text::{decode_text, encode_text, TextSeverity, TEXT_PAYLOAD_LEN};
 use crate::connection::{Connection, ConnectionEvent};
-use crate::dispatch::{SenderFilter, SenderId, TypeId};
+use crate::dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 use crate::error::Error;
+use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 
@@ -36,6 +38,7 @@ pub struct BaseIds {
 
 /// Registers the device's sender; the caller then registers its own types and calls
 /// [`register_base_types`] (C++ order: sender, device types, then the three base types).
+/// [`RemoteCore::new`] and [`register_server`] do all three in that order.
 pub fn register_sender(conn: &Connection, device: &str) -> Result<SenderId, Error> {
     conn.register_sender(device)
 }
@@ -232,5 +235,141 @@ impl PingCycle {
     /// Suppresses (or re-enables) the "no response" texts.
     pub fn set_quiet(&self, quiet: bool) {
         self.state.shutup.set(quiet);
+    }
+}
+
+/// Server half: registers `device`'s sender, its own types (`types`), then the three base
+/// types — the C++ order — and answers its pings. Returns the base ids and what `types`
+/// returned.
+pub fn register_server<T>(
+    conn: &Connection,
+    device: &str,
+    types: impl FnOnce(&Connection) -> Result<T, Error>,
+) -> Result<(BaseIds, T), Error> {
+    let sender = register_sender(conn, device)?;
+    let ids = types(conn)?;
+    let base = register_base_types(conn, sender)?;
+    serve_pings(conn, &base);
+    Ok((base, ids))
+}
+
+/// What every remote (client half of a device) shares: its connection, base ids, ping cycle,
+/// device name and the handlers it registered for its own sender, removed again on drop.
+///
+/// Each remote (`TrackerRemote`, `ButtonRemote`, ...) holds one and derefs to it, because every
+/// remote offers the same [`mainloop`](Self::mainloop), [`connection`](Self::connection),
+/// [`device`](Self::device), [`sender`](Self::sender) and [`ping_cycle`](Self::ping_cycle);
+/// writing them once here keeps the remotes to their device-specific parts. It is public so
+/// that a remote for a device type this crate does not know can be built the same way.
+pub struct RemoteCore {
+    conn: Connection,
+    base: BaseIds,
+    ping: PingCycle,
+    device: String,
+    handlers: Vec<HandlerId>,
+}
+
+impl RemoteCore {
+    /// Opens the connection of `Device@location` (shared with other devices at that location)
+    /// and returns the device part of the name with it.
+    pub fn open(name: &str) -> Result<(String, Connection), Error> {
+        let parsed = DeviceName::parse(name)?;
+        let conn = Connection::open_location(&parsed)?;
+        Ok((parsed.device, conn))
+    }
+
+    /// Sets up a remote for `device` on `conn` in the C++ order: the sender, then the device's
+    /// own types (`types`, whose result is returned alongside), then the three base types;
+    /// then attaches the default printer and starts the ping cycle.
+    pub fn new<T>(
+        device: &str,
+        conn: &Connection,
+        types: impl FnOnce(&Connection) -> Result<T, Error>,
+    ) -> Result<(RemoteCore, T), Error> {
+        let sender = register_sender(conn, device)?;
+        let ids = types(conn)?;
+        let base = register_base_types(conn, sender)?;
+        attach_default_printer(conn, &base);
+        let ping = PingCycle::new(conn, base);
+        let core = RemoteCore {
+            conn: conn.clone(),
+            base,
+            ping,
+            device: device.to_string(),
+            handlers: Vec::new(),
+        };
+        Ok((core, ids))
+    }
+
+    /// Registers `f` for messages of `type_id` from this device's sender; the handler is
+    /// removed when the remote is dropped. Takes `&mut self`, so only the remote's constructor
+    /// can add handlers (remotes deref to `&RemoteCore` only).
+    pub fn handle(&mut self, type_id: TypeId, f: impl FnMut(&Message<'_>) + 'static) {
+        let h = self
+            .conn
+            .register_handler(type_id, SenderFilter::Only(self.base.sender), f);
+        self.handlers.push(h);
+    }
+
+    /// Services the connection (all devices on it) and this device's ping cycle.
+    pub fn mainloop(&self) -> Result<(), Error> {
+        self.conn.mainloop()?;
+        self.ping.poll(&self.conn);
+        Ok(())
+    }
+
+    /// The connection this remote uses.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+
+    /// The device (sender) name.
+    pub fn device(&self) -> &str {
+        &self.device
+    }
+
+    /// The device's sender id on this connection.
+    pub fn sender(&self) -> SenderId {
+        self.base.sender
+    }
+
+    /// The base type ids (text, ping, pong) and the sender.
+    pub fn base_ids(&self) -> &BaseIds {
+        &self.base
+    }
+
+    /// The ping cycle (server liveness).
+    pub fn ping_cycle(&self) -> &PingCycle {
+        &self.ping
+    }
+
+    /// Sends `payload` as `type_id` from this device, RELIABLE, stamped now.
+    pub fn send(&self, type_id: TypeId, payload: &[u8]) -> Result<(), Error> {
+        self.send_at(TimeVal::now(), type_id, payload, class::RELIABLE)
+    }
+
+    /// Sends `payload` as `type_id` from this device with an explicit time and class.
+    pub fn send_at(
+        &self,
+        time: TimeVal,
+        type_id: TypeId,
+        payload: &[u8],
+        class_of_service: u32,
+    ) -> Result<(), Error> {
+        self.conn
+            .pack_message(time, type_id, self.base.sender, payload, class_of_service)
+    }
+
+    /// Sends a text message from this device.
+    pub fn send_text(&self, severity: TextSeverity, level: u32, text: &str) -> Result<(), Error> {
+        send_text(&self.conn, self.base.sender, severity, level, text)
+    }
+}
+
+impl Drop for RemoteCore {
+    fn drop(&mut self) {
+        for h in self.handlers.drain(..) {
+            self.conn.remove_handler(h);
+        }
     }
 }

@@ -3,16 +3,16 @@
 //! server half (C++ `vrpn_Button_Filter` semantics), [`ButtonExample`] the example server.
 
 use std::cell::{Cell, RefCell};
+use std::ops::Deref;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
 use super::ServerDevice;
 use crate::connection::{Connection, ConnectionEvent};
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::button as codec;
@@ -82,30 +82,28 @@ struct RemoteShared {
 
 /// Client half of a button device: callbacks and the latest state of every button.
 pub struct ButtonRemote {
-    conn: Connection,
+    core: RemoteCore,
     ids: ButtonIds,
-    base: BaseIds,
-    ping: PingCycle,
     shared: Rc<RemoteShared>,
-    device: String,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for ButtonRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl ButtonRemote {
     /// Opens `Device@location` (sharing the connection with other devices at that location).
     pub fn new(name: &str) -> Result<ButtonRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<ButtonRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = ButtonIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, ButtonIds::register)?;
         let shared = Rc::new(RemoteShared {
             change: CallbackList::default(),
             states_cb: CallbackList::default(),
@@ -114,13 +112,9 @@ impl ButtonRemote {
             got_states: Cell::new(false),
             bad_messages: Cell::new(0),
         });
-        let only = SenderFilter::Only(sender);
-        let mut handlers = Vec::new();
         let s = shared.clone();
-        handlers.push(conn.register_handler(
-            ids.change,
-            only,
-            move |m| match codec::Change::decode(m.payload) {
+        core.handle(ids.change, move |m| {
+            match codec::Change::decode(m.payload) {
                 Ok(c) => {
                     if let Ok(i) = usize::try_from(c.button) {
                         if i < MAX_BUTTONS {
@@ -134,13 +128,11 @@ impl ButtonRemote {
                     });
                 }
                 Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
-            },
-        ));
+            }
+        });
         let s = shared.clone();
-        handlers.push(conn.register_handler(
-            ids.states,
-            only,
-            move |m| match codec::States::decode(m.payload) {
+        core.handle(ids.states, move |m| {
+            match codec::States::decode(m.payload) {
                 Ok(st) => {
                     s.num_buttons.set(st.count as i32);
                     s.got_states.set(true);
@@ -155,34 +147,9 @@ impl ButtonRemote {
                     });
                 }
                 Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
-            },
-        ));
-        Ok(ButtonRemote {
-            conn: conn.clone(),
-            ids,
-            base,
-            ping,
-            shared,
-            device: device.to_string(),
-            handlers,
-        })
-    }
-
-    /// Services the connection (all devices on it) and this device's ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
-    }
-
-    /// The connection this remote uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-
-    /// The device (sender) name.
-    pub fn device(&self) -> &str {
-        &self.device
+            }
+        });
+        Ok(ButtonRemote { core, ids, shared })
     }
 
     /// Calls `f` for every Change report.
@@ -229,13 +196,7 @@ impl ButtonRemote {
     fn admin(&self, button: i32, mode: i32) -> Result<(), Error> {
         let mut buf = [0u8; codec::Admin::LEN];
         codec::Admin { button, mode }.encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.admin,
-            self.base.sender,
-            &buf,
-            class::RELIABLE,
-        )
+        self.send(self.ids.admin, &buf)
     }
 
     fn check(&self, button: i32, what: &str) -> Result<(), Error> {
@@ -244,7 +205,7 @@ impl ButtonRemote {
                 "vrpn_Button::{what}() buttons id {button} is greater than the number of buttons({})",
                 self.num_buttons()
             );
-            let _ = base::send_text(&self.conn, self.base.sender, TextSeverity::Error, 0, &text);
+            let _ = self.send_text(TextSeverity::Error, 0, &text);
             return Err(Error::Unsupported(
                 "button index outside the device's count",
             ));
@@ -272,19 +233,6 @@ impl ButtonRemote {
     /// Asks the server to make every button a toggle.
     pub fn set_all_toggle(&self, on: bool) -> Result<(), Error> {
         self.admin(ALL_ID, if on { TOGGLE_ON } else { TOGGLE_OFF })
-    }
-
-    /// The ping cycle (server liveness).
-    pub fn ping_cycle(&self) -> &PingCycle {
-        &self.ping
-    }
-}
-
-impl Drop for ButtonRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
     }
 }
 
@@ -344,10 +292,8 @@ pub struct ButtonServer {
 impl ButtonServer {
     /// Registers `device` with `buttons` buttons (clamped to 256).
     pub fn new(device: &str, conn: &Connection, buttons: usize) -> Result<ButtonServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let bids = ButtonIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, bids) = base::register_server(conn, device, ButtonIds::register)?;
+        let sender = base.sender;
         let alert = conn.register_type(codec::ALERT)?;
         let ids = ServerIds {
             ids: bids,

@@ -2,16 +2,16 @@
 //! [`DialRemote`] is the client half, [`DialServer`] the server half, [`DialExample`] the
 //! C++ `vrpn_Dial_Example_Server`.
 
+use std::ops::Deref;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
 use super::ServerDevice;
 use crate::connection::Connection;
-use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::dispatch::{CallbackList, HandlerId, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::dial as codec;
@@ -53,31 +53,30 @@ struct RemoteShared {
 
 /// Client half of a dial device.
 pub struct DialRemote {
-    conn: Connection,
-    ping: PingCycle,
+    core: RemoteCore,
     shared: Rc<RemoteShared>,
-    device: String,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for DialRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl DialRemote {
     /// Opens `Device@location` (sharing the connection with other devices at that location).
     pub fn new(name: &str) -> Result<DialRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<DialRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = DialIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, DialIds::register)?;
         let shared = Rc::new(RemoteShared::default());
         let s = shared.clone();
-        let h = conn.register_handler(ids.update, SenderFilter::Only(sender), move |m| {
+        core.handle(ids.update, move |m| {
             match codec::Update::decode(m.payload) {
                 Ok(u) => s.update.call(&DialUpdate {
                     time: m.time,
@@ -87,30 +86,7 @@ impl DialRemote {
                 Err(_) => s.bad.set(s.bad.get() + 1),
             }
         });
-        Ok(DialRemote {
-            conn: conn.clone(),
-            ping,
-            shared,
-            device: device.to_string(),
-            handlers: vec![h],
-        })
-    }
-
-    /// Services the connection (all devices on it) and this device's ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
-    }
-
-    /// The connection this remote uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-
-    /// The device (sender) name.
-    pub fn device(&self) -> &str {
-        &self.device
+        Ok(DialRemote { core, shared })
     }
 
     /// Calls `f` for every dial update.
@@ -127,19 +103,6 @@ impl DialRemote {
     pub fn bad_messages(&self) -> u64 {
         self.shared.bad.get()
     }
-
-    /// The ping cycle (server liveness).
-    pub fn ping_cycle(&self) -> &PingCycle {
-        &self.ping
-    }
-}
-
-impl Drop for DialRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
-    }
 }
 
 /// Server half of a dial device: accumulate rotation per dial, then report.
@@ -155,10 +118,7 @@ pub struct DialServer {
 impl DialServer {
     /// Registers `device` with `dials` dials (clamped to 128).
     pub fn new(device: &str, conn: &Connection, dials: usize) -> Result<DialServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = DialIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, DialIds::register)?;
         Ok(DialServer {
             conn: conn.clone(),
             ids,

@@ -8,13 +8,13 @@
 //! `constraint_*` messages themselves can still be sent with [`ForceDeviceRemote::send_request`].
 
 use std::cell::{Cell, RefCell};
+use std::ops::Deref;
 use std::rc::Rc;
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::force as codec;
@@ -301,36 +301,34 @@ struct RemoteShared {
 
 /// Client half of a force device.
 pub struct ForceDeviceRemote {
-    conn: Connection,
+    core: RemoteCore,
     ids: ForceIds,
-    base: BaseIds,
-    ping: PingCycle,
     shared: Rc<RemoteShared>,
-    handlers: Vec<HandlerId>,
     constraint: Cell<Constraint>,
     constraint_field: Cell<ForceField>,
     effect_buf: RefCell<Vec<u8>>,
 }
 
+impl Deref for ForceDeviceRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
+}
+
 impl ForceDeviceRemote {
     /// Opens `Device@location`.
     pub fn new(name: &str) -> Result<ForceDeviceRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<ForceDeviceRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = ForceIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, ForceIds::register)?;
         let shared = Rc::new(RemoteShared::default());
-        let only = SenderFilter::Only(sender);
         let s = shared.clone();
-        let h1 = conn.register_handler(ids.force(), only, move |m| {
+        core.handle(ids.force(), move |m| {
             if let Ok(f) = codec::Force::decode(m.payload) {
                 s.force.call(&ForceReport {
                     time: m.time,
@@ -339,7 +337,7 @@ impl ForceDeviceRemote {
             }
         });
         let s = shared.clone();
-        let h2 = conn.register_handler(ids.scp(), only, move |m| {
+        core.handle(ids.scp(), move |m| {
             if let Ok(f) = codec::Scp::decode(m.payload) {
                 s.scp.call(&ScpReport {
                     time: m.time,
@@ -349,7 +347,7 @@ impl ForceDeviceRemote {
             }
         });
         let s = shared.clone();
-        let h3 = conn.register_handler(ids.error(), only, move |m| {
+        core.handle(ids.error(), move |m| {
             if let Ok(f) = codec::ForceError::decode(m.payload) {
                 s.error.call(&ForceErrorReport {
                     time: m.time,
@@ -358,23 +356,13 @@ impl ForceDeviceRemote {
             }
         });
         Ok(ForceDeviceRemote {
-            conn: conn.clone(),
+            core,
             ids,
-            base,
-            ping,
             shared,
-            handlers: vec![h1, h2, h3],
             constraint: Cell::new(Constraint::default()),
             constraint_field: Cell::new(ForceField::default()),
             effect_buf: RefCell::new(Vec::new()),
         })
-    }
-
-    /// Services the connection and the ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
     }
 
     /// Calls `f` for every force report.
@@ -396,13 +384,7 @@ impl ForceDeviceRemote {
     pub fn start_surface(&self, plane: &Plane) -> Result<(), Error> {
         let mut buf = [0u8; Plane::LEN];
         plane.encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.plane(),
-            self.base.sender,
-            &buf,
-            class::RELIABLE,
-        )
+        self.send(self.ids.plane(), &buf)
     }
 
     /// Sends a plane then its extra properties, both LOW_LATENCY (C++ `sendSurface`).
@@ -410,32 +392,19 @@ impl ForceDeviceRemote {
         let now = TimeVal::now();
         let mut buf = [0u8; Plane::LEN];
         plane.encode(&mut buf);
-        self.conn.pack_message(
-            now,
-            self.ids.plane(),
-            self.base.sender,
-            &buf,
-            class::LOW_LATENCY,
-        )?;
+        self.send_at(now, self.ids.plane(), &buf, class::LOW_LATENCY)?;
         let mut buf2 = [0u8; Plane2::LEN];
         extra.encode(&mut buf2);
-        self.conn.pack_message(
-            now,
-            self.ids.plane2(),
-            self.base.sender,
-            &buf2,
-            class::LOW_LATENCY,
-        )
+        self.send_at(now, self.ids.plane2(), &buf2, class::LOW_LATENCY)
     }
 
     /// Sends a force field LOW_LATENCY (C++ `sendForceField`).
     pub fn send_force_field(&self, field: &ForceField) -> Result<(), Error> {
         let mut buf = [0u8; ForceField::LEN];
         field.encode(&mut buf);
-        self.conn.pack_message(
+        self.send_at(
             TimeVal::now(),
             self.ids.force_field(),
-            self.base.sender,
             &buf,
             class::LOW_LATENCY,
         )
@@ -447,13 +416,7 @@ impl ForceDeviceRemote {
     pub fn send_request(&self, request: &ForceRequest) -> Result<(), Error> {
         let mut buf = [0u8; REQUEST_MAX];
         let len = request.encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.0[request.type_index()],
-            self.base.sender,
-            &buf[..len],
-            class::RELIABLE,
-        )
+        self.send(self.ids.0[request.type_index()], &buf[..len])
     }
 
     /// Sends a custom effect RELIABLE (C++ `setCustomEffect` + `startEffect`).
@@ -464,13 +427,7 @@ impl ForceDeviceRemote {
             buf.resize(len, 0); // grows to the largest effect sent, then reused
         }
         codec::encode_custom_effect(effect_id, params, &mut buf[..len]);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.custom_effect(),
-            self.base.sender,
-            &buf[..len],
-            class::RELIABLE,
-        )
+        self.send(self.ids.custom_effect(), &buf[..len])
     }
 
     /// Stops the custom effect: id 0xFFFFFFFF with no parameters (C++ `stopEffect`).
@@ -482,13 +439,7 @@ impl ForceDeviceRemote {
     pub fn stop_force_field(&self) -> Result<(), Error> {
         let mut buf = [0u8; ForceField::LEN];
         ForceField::default().encode(&mut buf);
-        self.conn.pack_message(
-            TimeVal::now(),
-            self.ids.force_field(),
-            self.base.sender,
-            &buf,
-            class::RELIABLE,
-        )
+        self.send(self.ids.force_field(), &buf)
     }
 
     /// The constraint as last set.
@@ -574,14 +525,6 @@ impl ForceDeviceRemote {
     }
 }
 
-impl Drop for ForceDeviceRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
-    }
-}
-
 #[derive(Default)]
 struct ServerShared {
     plane: CallbackList<(TimeVal, Plane)>,
@@ -620,10 +563,8 @@ pub struct ForceDeviceServer {
 impl ForceDeviceServer {
     /// Registers `device` on a server (or loopback) connection.
     pub fn new(device: &str, conn: &Connection) -> Result<ForceDeviceServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = ForceIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, ForceIds::register)?;
+        let sender = base.sender;
         let shared = Rc::new(ServerShared::default());
         let only = SenderFilter::Only(sender);
         let s = shared.clone();

@@ -2,13 +2,13 @@
 //! and calls back. Quirks of the C++ remote and server are kept for wire compatibility.
 
 use std::cell::RefCell;
+use std::ops::Deref;
 use std::rc::Rc;
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, RemoteCore};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::poser as codec;
@@ -63,44 +63,35 @@ pub struct PoserPose {
 
 /// Client half: sends pose and velocity requests.
 pub struct PoserRemote {
-    conn: Connection,
+    core: RemoteCore,
     ids: PoserIds,
-    base: BaseIds,
-    ping: PingCycle,
     pos: [f64; 3],
     quat: [f64; 4],
+}
+
+impl Deref for PoserRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl PoserRemote {
     /// Opens `Device@location`.
     pub fn new(name: &str) -> Result<PoserRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<PoserRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = PoserIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (core, ids) = RemoteCore::new(device, conn, PoserIds::register)?;
         Ok(PoserRemote {
-            conn: conn.clone(),
+            core,
             ids,
-            base,
-            ping,
             pos: [0.0; 3],
             quat: [0.0, 0.0, 0.0, 1.0],
         })
-    }
-
-    /// Services the connection and the ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
     }
 
     fn send_pose(&self, t: TypeId, time: TimeVal) -> Result<(), Error> {
@@ -110,8 +101,7 @@ impl PoserRemote {
             quat: self.quat,
         }
         .encode(&mut buf);
-        self.conn
-            .pack_message(time, t, self.base.sender, &buf, class::LOW_LATENCY)
+        self.send_at(time, t, &buf, class::LOW_LATENCY)
     }
 
     /// Requests an absolute pose.
@@ -156,8 +146,7 @@ impl PoserRemote {
             vel_quat_dt: dt,
         }
         .encode(&mut buf);
-        self.conn
-            .pack_message(time, t, self.base.sender, &buf, class::LOW_LATENCY)
+        self.send_at(time, t, &buf, class::LOW_LATENCY)
     }
 
     /// Requests a velocity.
@@ -220,10 +209,8 @@ pub struct PoserServer {
 impl PoserServer {
     /// Registers `device` on a server (or loopback) connection.
     pub fn new(device: &str, conn: &Connection) -> Result<PoserServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = PoserIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, PoserIds::register)?;
+        let sender = base.sender;
         let shared = Rc::new(ServerShared {
             state: RefCell::new(PoserState {
                 time: TimeVal::ZERO,

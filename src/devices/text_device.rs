@@ -2,16 +2,16 @@
 //! `vrpn_Base text_message` type, and [`TextExample`] (our extension for `vrpn_server`).
 
 use std::cell::Cell;
+use std::ops::Deref;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::text::{decode_text, encode_text, TextSeverity, MAX_TEXT, TEXT_PAYLOAD_LEN};
 use super::ServerDevice;
 use crate::connection::Connection;
-use crate::dispatch::{CallbackList, HandlerId, SenderFilter};
+use crate::dispatch::{CallbackList, HandlerId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 
@@ -52,30 +52,32 @@ struct ReceiverShared {
 
 /// Client half: calls back for every text message from its device (C++ `vrpn_Text_Receiver`).
 pub struct TextReceiver {
-    conn: Connection,
-    ping: PingCycle,
+    core: RemoteCore,
     shared: Rc<ReceiverShared>,
-    device: String,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for TextReceiver {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl TextReceiver {
     /// Opens `Device@location` (sharing the connection with other devices at that location).
     pub fn new(name: &str) -> Result<TextReceiver, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A receiver for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<TextReceiver, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        // No types of its own: text messages are a base type.
+        let (mut core, ()) = RemoteCore::new(device, conn, |_| Ok(()))?;
         let shared = Rc::new(ReceiverShared::default());
         let s = shared.clone();
-        let h = conn.register_handler(base.text, SenderFilter::Only(sender), move |m| {
+        let text = core.base_ids().text;
+        core.handle(text, move |m| {
             if let Some((severity, level, text)) = decode_text(m.payload) {
                 let mut msg = TextMessage {
                     time: m.time,
@@ -89,20 +91,7 @@ impl TextReceiver {
                 s.message.call(&msg);
             }
         });
-        Ok(TextReceiver {
-            conn: conn.clone(),
-            ping,
-            shared,
-            device: device.to_string(),
-            handlers: vec![h],
-        })
-    }
-
-    /// Services the connection, then the ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
+        Ok(TextReceiver { core, shared })
     }
 
     /// Calls `f` for every text message from the device.
@@ -119,29 +108,6 @@ impl TextReceiver {
     pub fn received(&self) -> u64 {
         self.shared.count.get()
     }
-
-    /// The device (sender) name.
-    pub fn device(&self) -> &str {
-        &self.device
-    }
-
-    /// The connection this receiver uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-
-    /// The ping cycle (server liveness).
-    pub fn ping_cycle(&self) -> &PingCycle {
-        &self.ping
-    }
-}
-
-impl Drop for TextReceiver {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
-    }
 }
 
 /// Server half: sends text messages as a device (C++ `vrpn_Text_Sender`).
@@ -153,9 +119,7 @@ pub struct TextSender {
 impl TextSender {
     /// Registers `device` on a server (or loopback) connection and answers its pings.
     pub fn new(device: &str, conn: &Connection) -> Result<TextSender, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ()) = base::register_server(conn, device, |_| Ok(()))?;
         Ok(TextSender {
             conn: conn.clone(),
             base,

@@ -3,17 +3,17 @@
 //! driver reports through; [`TrackerNull`] the `vrpn_Tracker_NULL` test device.
 
 use std::cell::{Cell, RefCell};
+use std::ops::Deref;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::base::{self, BaseIds, PingCycle};
+use super::base::{self, BaseIds, RemoteCore};
 use super::ServerDevice;
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::name::DeviceName;
 use crate::time::TimeVal;
 use crate::wire::class;
 use crate::wire::payload::tracker as codec;
@@ -234,37 +234,33 @@ fn store<T: Copy>(slots: &RefCell<Vec<Option<T>>>, sensor: i32, value: T) {
 /// # Ok::<(), vrpn::Error>(())
 /// ```
 pub struct TrackerRemote {
-    conn: Connection,
+    core: RemoteCore,
     ids: TrackerIds,
-    base: BaseIds,
-    ping: PingCycle,
     shared: Rc<RemoteShared>,
-    device: String,
-    handlers: Vec<HandlerId>,
+}
+
+impl Deref for TrackerRemote {
+    type Target = RemoteCore;
+    fn deref(&self) -> &RemoteCore {
+        &self.core
+    }
 }
 
 impl TrackerRemote {
     /// Opens `Device@location` (sharing the connection with other devices at that location).
     pub fn new(name: &str) -> Result<TrackerRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
-        Self::on_connection(&parsed.device, &conn)
+        let (device, conn) = RemoteCore::open(name)?;
+        Self::on_connection(&device, &conn)
     }
 
     /// A remote for `device` on an existing connection (in-process servers, shared sockets).
     pub fn on_connection(device: &str, conn: &Connection) -> Result<TrackerRemote, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = TrackerIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::attach_default_printer(conn, &base);
-        let ping = PingCycle::new(conn, base);
+        let (mut core, ids) = RemoteCore::new(device, conn, TrackerIds::register)?;
         let shared = Rc::new(RemoteShared::default());
         shared.latest_pose.borrow_mut().reserve(16);
-        let only = SenderFilter::Only(sender);
-        let mut handlers = Vec::new();
 
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.pos_quat, only, move |m| {
+        core.handle(ids.pos_quat, move |m| {
             match codec::PosQuat::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
                     let p = TrackerPose {
@@ -278,9 +274,9 @@ impl TrackerRemote {
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
             }
-        }));
+        });
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.velocity, only, move |m| {
+        core.handle(ids.velocity, move |m| {
             match codec::Velocity::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
                     let v = TrackerVelocity {
@@ -295,10 +291,11 @@ impl TrackerRemote {
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
             }
-        }));
+        });
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.acceleration, only, move |m| {
-            match codec::Acceleration::decode(m.payload) {
+        core.handle(
+            ids.acceleration,
+            move |m| match codec::Acceleration::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
                     let a = TrackerAcceleration {
                         time: m.time,
@@ -311,10 +308,10 @@ impl TrackerRemote {
                     s.acceleration.call(&a);
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
-            }
-        }));
+            },
+        );
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.to_room, only, move |m| {
+        core.handle(ids.to_room, move |m| {
             if let Ok(r) = codec::ToRoom::decode(m.payload) {
                 s.to_room.call(&TrackerToRoom {
                     time: m.time,
@@ -322,9 +319,9 @@ impl TrackerRemote {
                     quat: quat_from_xyzw(r.quat),
                 });
             }
-        }));
+        });
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.unit_to_sensor, only, move |m| {
+        core.handle(ids.unit_to_sensor, move |m| {
             if let Ok(r) = codec::UnitToSensor::decode(m.payload) {
                 s.unit_to_sensor.call(&TrackerUnitToSensor {
                     time: m.time,
@@ -333,9 +330,9 @@ impl TrackerRemote {
                     quat: quat_from_xyzw(r.quat),
                 });
             }
-        }));
+        });
         let s = shared.clone();
-        handlers.push(conn.register_handler(ids.workspace, only, move |m| {
+        core.handle(ids.workspace, move |m| {
             if let Ok(r) = codec::Workspace::decode(m.payload) {
                 s.workspace.call(&TrackerWorkspace {
                     time: m.time,
@@ -343,33 +340,8 @@ impl TrackerRemote {
                     max: Vector3::from(r.max),
                 });
             }
-        }));
-        Ok(TrackerRemote {
-            conn: conn.clone(),
-            ids,
-            base,
-            ping,
-            shared,
-            device: device.to_string(),
-            handlers,
-        })
-    }
-
-    /// Services the connection (all devices on it) and this device's ping cycle.
-    pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
-    }
-
-    /// The connection this remote uses.
-    pub fn connection(&self) -> &Connection {
-        &self.conn
-    }
-
-    /// The device (sender) name.
-    pub fn device(&self) -> &str {
-        &self.device
+        });
+        Ok(TrackerRemote { core, ids, shared })
     }
 
     /// Calls `f` for every pose report of every sensor.
@@ -455,52 +427,29 @@ impl TrackerRemote {
         self.shared.bad_messages.get()
     }
 
-    fn request(&self, t: TypeId, payload: &[u8]) -> Result<(), Error> {
-        self.conn.pack_message(
-            TimeVal::now(),
-            t,
-            self.base.sender,
-            payload,
-            class::RELIABLE,
-        )
-    }
-
     /// Asks the server for its tracker-to-room transform.
     pub fn request_to_room(&self) -> Result<(), Error> {
-        self.request(self.ids.request_to_room, &[])
+        self.send(self.ids.request_to_room, &[])
     }
 
     /// Asks the server for every sensor's unit-to-sensor transform.
     pub fn request_unit_to_sensor(&self) -> Result<(), Error> {
-        self.request(self.ids.request_unit_to_sensor, &[])
+        self.send(self.ids.request_unit_to_sensor, &[])
     }
 
     /// Asks the server for its workspace.
     pub fn request_workspace(&self) -> Result<(), Error> {
-        self.request(self.ids.request_workspace, &[])
+        self.send(self.ids.request_workspace, &[])
     }
 
     /// Asks for `hz` reports per second (servers that cannot honour it ignore it).
     pub fn set_update_rate(&self, hz: f64) -> Result<(), Error> {
-        self.request(self.ids.set_update_rate, &hz.to_be_bytes())
+        self.send(self.ids.set_update_rate, &hz.to_be_bytes())
     }
 
     /// Asks the server to re-zero its origin (servers that cannot honour it ignore it).
     pub fn reset_origin(&self) -> Result<(), Error> {
-        self.request(self.ids.reset_origin, &[])
-    }
-
-    /// The ping cycle (server liveness).
-    pub fn ping_cycle(&self) -> &PingCycle {
-        &self.ping
-    }
-}
-
-impl Drop for TrackerRemote {
-    fn drop(&mut self) {
-        for h in self.handlers.drain(..) {
-            self.conn.remove_handler(h);
-        }
+        self.send(self.ids.reset_origin, &[])
     }
 }
 
@@ -555,10 +504,8 @@ impl TrackerServer {
         conn: &Connection,
         transforms: TrackerTransforms,
     ) -> Result<TrackerServer, Error> {
-        let sender = base::register_sender(conn, device)?;
-        let ids = TrackerIds::register(conn)?;
-        let base = base::register_base_types(conn, sender)?;
-        base::serve_pings(conn, &base);
+        let (base, ids) = base::register_server(conn, device, TrackerIds::register)?;
+        let sender = base.sender;
         let timestamp = Rc::new(Cell::new(TimeVal::ZERO));
         let num_sensors = transforms.unit_to_sensor.len();
         let transforms = Rc::new(transforms);
