@@ -208,3 +208,30 @@ fn peer_that_dies_mid_message_is_dropped_cleanly() {
     let p = rig.poses.get();
     rig.run_until(|r| r.poses.get() > p + 10);
 }
+
+#[test]
+fn remote_logging_requests_are_refused_without_writing_files() {
+    let mut rig = Rig::new();
+    let target = std::env::temp_dir().join(format!("vrpn-remote-log-{}.vrpn", std::process::id()));
+    let _ = std::fs::remove_file(&target);
+    let name = target.to_str().unwrap();
+    let mut bytes = cookie(b"07.38", b'1');
+    let mut payload = (name.len() as i32).to_be_bytes().to_vec();
+    payload.extend_from_slice(&0i32.to_be_bytes());
+    payload.extend_from_slice(name.as_bytes());
+    payload.extend_from_slice(&[0, 0]);
+    bytes.extend(message((24 + payload.len()) as u32, -4, &payload));
+    let mut peer = TcpStream::connect((Ipv4Addr::LOCALHOST, rig.port)).unwrap();
+    peer.write_all(&bytes).unwrap();
+    rig.run_until(|r| {
+        r.notices
+            .borrow()
+            .iter()
+            .any(|n| n.text.contains("remote logging requests are refused"))
+    });
+    assert!(
+        !target.exists(),
+        "no file may be created for a remote request"
+    );
+    assert_eq!(rig.server.connected_peers(), 2);
+}

@@ -1444,7 +1444,21 @@ impl Core {
                 }
                 None
             }
-            system::LOG_DESCRIPTION => None,
+            system::LOG_DESCRIPTION => {
+                // C++ servers open the named files on the server machine. An unauthenticated
+                // peer choosing paths we write to is a hazard, so the request is refused.
+                if let Ok(d) = system::decode_log_description(payload) {
+                    queue.push_back(Delivery::Notice(Notice {
+                        severity: Severity::Warning,
+                        text: format!(
+                            "{} asked this side to log (incoming {:?}, outgoing {:?}); remote \
+                             logging requests are refused: log locally with -li/-lo instead",
+                            ep.peer, d.incoming, d.outgoing
+                        ),
+                    }));
+                }
+                None
+            }
             system::DISCONNECT => {
                 ep.clear_remote_names();
                 None
