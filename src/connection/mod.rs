@@ -192,36 +192,35 @@ impl Connection {
         match &name.location {
             Location::Loopback => Ok(Connection::loopback()),
             Location::File { path } => {
-                let key = name.location_text.clone();
-                if let Some(inner) = SHARED.with(|s| s.borrow().get(&key).and_then(Weak::upgrade)) {
-                    return Ok(Connection { inner });
-                }
-                let conn = Connection::replay_file(path)?;
-                SHARED.with(|s| {
-                    let mut s = s.borrow_mut();
-                    s.retain(|_, w| w.strong_count() > 0);
-                    s.insert(key, Rc::downgrade(&conn.inner));
-                });
-                Ok(conn)
+                Self::shared(&name.location_text, || Connection::replay_file(path))
             }
             Location::Net {
                 host,
                 port,
                 tcp_only,
-            } => {
-                let key = name.location_text.clone();
-                if let Some(inner) = SHARED.with(|s| s.borrow().get(&key).and_then(Weak::upgrade)) {
-                    return Ok(Connection { inner });
-                }
-                let conn = Connection::client(host, *port, *tcp_only, Limits::default())?;
-                SHARED.with(|s| {
-                    let mut s = s.borrow_mut();
-                    s.retain(|_, w| w.strong_count() > 0);
-                    s.insert(key, Rc::downgrade(&conn.inner));
-                });
-                Ok(conn)
-            }
+            } => Self::shared(&name.location_text, || {
+                Connection::client(host, *port, *tcp_only, Limits::default())
+            }),
         }
+    }
+
+    /// The live connection opened for this location text, or a new one from `make` (C++
+    /// shares one connection among all devices whose location text is byte-identical).
+    fn shared(
+        location_text: &str,
+        make: impl FnOnce() -> Result<Connection, Error>,
+    ) -> Result<Connection, Error> {
+        if let Some(inner) = SHARED.with(|s| s.borrow().get(location_text).and_then(Weak::upgrade))
+        {
+            return Ok(Connection { inner });
+        }
+        let conn = make()?;
+        SHARED.with(|s| {
+            let mut s = s.borrow_mut();
+            s.retain(|_, w| w.strong_count() > 0);
+            s.insert(location_text.to_string(), Rc::downgrade(&conn.inner));
+        });
+        Ok(conn)
     }
 
     /// A new, unshared replay of the log at `path` (what `Device@file:path` opens).
@@ -425,6 +424,11 @@ impl Connection {
     fn deliver(&self, msg: &Message<'_>) {
         self.inner.dispatching.set(true);
         self.inner.handlers.dispatch(msg);
+        if self.inner.deferred.borrow().is_empty() {
+            // The common case: no handler sent anything to local handlers.
+            self.inner.dispatching.set(false);
+            return;
+        }
         let mut cursor = 0;
         loop {
             let mut scratch = std::mem::take(&mut *self.inner.deferred_scratch.borrow_mut());
