@@ -37,6 +37,8 @@
 pub mod connection;
 pub mod devices;
 pub mod dispatch;
+#[path = "../drivers/mod.rs"]
+pub mod drivers;
 mod error;
 #[doc(hidden)]
 pub mod fuzzing;
@@ -44,6 +46,7 @@ pub mod layered;
 pub mod log;
 pub mod name;
 mod net;
+pub mod serial;
 pub mod server;
 pub mod time;
 pub mod wire;
@@ -62,4 +65,4 @@ pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
 pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
-pub use time::TimeVal;
+pub use time::{Now, TimeVal};

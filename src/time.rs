@@ -5,7 +5,45 @@
 //! `i64` so arithmetic never overflows; header seconds are decoded as unsigned 32-bit (what a
 //! 64-bit C++ peer does) and payload timevals as signed.
 
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// One reading of both clocks, taken once per loop pass by the shell (or by a test's virtual
+/// clock) and passed down to everything below it.
+///
+/// `mono` orders deadlines and never jumps; `wall` is what messages carry (C++ stamps with
+/// `gettimeofday`). Keeping both from one reading lets a test drive a whole client and server
+/// through every time-out on a virtual clock.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Now {
+    /// Monotonic time, for deadlines.
+    pub mono: Instant,
+    /// Wall-clock time, for message timestamps.
+    pub wall: TimeVal,
+}
+
+impl Now {
+    /// Both clocks, read now. Only the I/O shell and the programs call this; everything else is
+    /// handed a `Now`.
+    pub fn read() -> Now {
+        Now {
+            mono: Instant::now(),
+            wall: TimeVal::now(),
+        }
+    }
+
+    /// The same moment moved `d` later on both clocks (virtual time in tests).
+    pub fn plus(&self, d: Duration) -> Now {
+        Now {
+            mono: self.mono + d,
+            wall: self.wall.plus(d),
+        }
+    }
+
+    /// Seconds from `earlier` to `self` on the monotonic clock (0 when `earlier` is later).
+    pub fn secs_since(&self, earlier: Instant) -> f64 {
+        self.mono.saturating_duration_since(earlier).as_secs_f64()
+    }
+}
 
 /// A point in time as VRPN messages carry it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]

@@ -1,0 +1,5 @@
+//! Hardware drivers, one folder per device: the sans-IO driver (a [`SerialDriver`]) and the
+//! device simulator its tests use (a [`DeviceModel`]).
+//!
+//! [`SerialDriver`]: crate::serial::SerialDriver
+//! [`DeviceModel`]: crate::serial::testing::DeviceModel

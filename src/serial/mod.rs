@@ -1,0 +1,14 @@
+//! Serial devices: the sans-IO driver interface ([`driver`]) and, for tests and simulators, a
+//! virtual serial line that runs a driver against a device model on a virtual clock
+//! ([`testing`]).
+//!
+//! A driver never touches a file descriptor or a clock. It is handed the bytes the port read
+//! (with the time the poll woke for the first of them), the current time on each deadline, and
+//! it answers with [`PortOps`](driver::PortOps): bytes to write, input to flush, modem lines to
+//! set, a reopen. The serial layer carries those out on a real port registered in the server's
+//! poll; the test line carries them out on a device model.
+
+pub mod driver;
+pub mod testing;
+
+pub use driver::{Parity, PortKind, PortOp, PortOps, PortSettings, SerialDriver};
