@@ -2,8 +2,8 @@
 
 use std::io;
 
-use crate::connection::names::NameLimit;
 use crate::name::NameError;
+use crate::proto::names::NameLimit;
 
 /// Errors returned by connection set-up and by calls that can fail.
 #[derive(Debug)]
@@ -35,6 +35,10 @@ pub enum Error {
 }
 
 impl Error {
+    pub(crate) fn from_log(e: crate::log::LogError) -> Error {
+        Error::Log(e.to_string())
+    }
+
     pub(crate) fn io(context: impl Into<String>, source: io::Error) -> Error {
         Error::Io {
             context: context.into(),
@@ -57,7 +61,7 @@ impl std::fmt::Display for Error {
             Error::PayloadTooLarge(n) => write!(
                 f,
                 "payload of {n} bytes exceeds the {} bytes a VRPN peer accepts",
-                crate::connection::MAX_PAYLOAD
+                crate::wire::MAX_PAYLOAD
             ),
             Error::Log(text) => f.write_str(text),
             Error::Unsupported(what) => write!(f, "not supported: {what}"),

@@ -36,7 +36,7 @@
 
 pub mod connection;
 pub mod devices;
-pub mod dispatch;
+pub use connection::dispatch;
 #[path = "../drivers/mod.rs"]
 pub mod drivers;
 mod error;
@@ -45,7 +45,8 @@ pub mod fuzzing;
 pub mod layered;
 pub mod log;
 pub mod name;
-mod net;
+pub mod net;
+pub mod proto;
 pub mod serial;
 pub mod server;
 pub mod time;
@@ -65,4 +66,5 @@ pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
 pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
+pub use net::Reactor;
 pub use time::{Now, TimeVal};

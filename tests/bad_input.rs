@@ -44,7 +44,7 @@ impl Rig {
     }
 
     fn step(&mut self) {
-        self.null.mainloop(Instant::now());
+        self.null.mainloop(vrpn::Now::read());
         self.server.mainloop().unwrap();
         self.client.mainloop().unwrap();
     }

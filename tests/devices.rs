@@ -21,7 +21,7 @@ fn pump(
 ) -> bool {
     let start = Instant::now();
     while start.elapsed() < timeout {
-        let now = Instant::now();
+        let now = vrpn::Now::read();
         for d in devices.iter_mut() {
             d.mainloop(now);
         }

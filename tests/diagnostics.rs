@@ -98,7 +98,7 @@ fn missing_device_warns_after_three_seconds_on_both_sides() {
     let nobody = TrackerRemote::new(&format!("Nobody@127.0.0.1:{port}")).unwrap();
     let start = Instant::now();
     while !heard.get() && start.elapsed() < Duration::from_secs(8) {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         server.mainloop().unwrap();
         nobody.mainloop().unwrap();
         std::thread::sleep(Duration::from_millis(5));
@@ -128,7 +128,7 @@ fn device_names_with_spaces_work_end_to_end() {
     remote.on_pose(move |_| c.set(c.get() + 1));
     let start = Instant::now();
     while n.get() < 5 && start.elapsed() < Duration::from_secs(10) {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         server.mainloop().unwrap();
         remote.mainloop().unwrap();
         std::thread::sleep(Duration::from_millis(1));

@@ -45,7 +45,7 @@ fn loopback_name_shares_the_process_connection() {
     remote.on_pose(move |_| c.set(c.get() + 1));
     let start = Instant::now();
     while n.get() < 3 && start.elapsed() < Duration::from_secs(5) {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         remote.mainloop().unwrap();
         std::thread::sleep(Duration::from_millis(1));
     }

@@ -467,7 +467,7 @@ fn pump(
 ) {
     let start = Instant::now();
     while start.elapsed() < Duration::from_secs(10) {
-        let now = Instant::now();
+        let now = vrpn::Now::read();
         for d in devices.iter_mut() {
             d.mainloop(now);
         }

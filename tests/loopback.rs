@@ -20,7 +20,7 @@ fn run_until(
 ) -> bool {
     let start = Instant::now();
     while start.elapsed() < timeout {
-        let now = Instant::now();
+        let now = vrpn::Now::read();
         for d in devices.iter_mut() {
             d.mainloop(now);
         }

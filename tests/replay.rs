@@ -220,7 +220,7 @@ fn client_log_survives_a_server_restart_and_holds_every_received_message() {
     let run = |null: &mut TrackerNull, server: &Connection, until: usize| {
         let start = Instant::now();
         while received.get() < until && start.elapsed() < Duration::from_secs(10) {
-            null.mainloop(Instant::now());
+            null.mainloop(vrpn::Now::read());
             server.mainloop().unwrap();
             tracker.mainloop().unwrap();
             std::thread::sleep(Duration::from_micros(300));
@@ -283,14 +283,14 @@ fn server_logs_outgoing_from_start_and_incoming_per_client() {
     // Reports from before any client connects are logged too.
     let start = Instant::now();
     while start.elapsed() < Duration::from_millis(50) {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         server.mainloop().unwrap();
         std::thread::sleep(Duration::from_millis(1));
     }
     let client = TrackerRemote::new(&format!("Tracker0@tcp://127.0.0.1:{port}")).unwrap();
     let start = Instant::now();
     while client.ping_cycle().last_pong().is_none() && start.elapsed() < Duration::from_secs(10) {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         server.mainloop().unwrap();
         client.mainloop().unwrap();
         std::thread::sleep(Duration::from_micros(300));

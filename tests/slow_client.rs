@@ -45,7 +45,7 @@ fn stalled_client_sheds_unreliable_then_is_dropped() {
     let p = poses.clone();
     good.on_pose(move |_| p.set(p.get() + 1));
     let mut step = || {
-        null.mainloop(Instant::now());
+        null.mainloop(vrpn::Now::read());
         server.mainloop().unwrap();
         good.mainloop().unwrap();
     };

@@ -3,140 +3,72 @@
 //! A [`Connection`] is a cheap handle (`Rc`) shared by every device object that uses it. Three
 //! kinds exist: a **server** listening on one UDP+TCP port for many peers, a **client** that
 //! reaches one server (and reconnects forever), and the **loopback** connection of this process,
-//! which has no sockets at all. All three deliver every packed message to local handlers
-//! directly, which is how an in-process remote hears an in-process server.
+//! which has no sockets at all (plus the **replay** of a log file). All of them deliver every
+//! packed message to local handlers directly, which is how an in-process remote hears an
+//! in-process server.
+//!
+//! Under the handle sit the three layers: a [`Session`](crate::proto::Session) (the protocol,
+//! no sockets, no clock), the shell (the sockets, in a [`Reactor`]) and the handler tables.
+//! One [`mainloop`](Connection::mainloop) pass reads the clock once and hands that time down.
 //!
 //! Callbacks run only inside [`Connection::mainloop`] or inside a call that sends a message.
 //! A callback may itself send, register, or read state: messages a callback sends to local
 //! handlers are queued and delivered right after it returns, so no handler is ever re-entered.
+//! Connections are not `Send`: one thread owns a connection and every device on it.
 
-pub(crate) mod endpoint;
+pub mod dispatch;
+mod liveness;
 pub mod names;
+mod printer;
+mod replay_control;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
-use std::net::Ipv4Addr;
+use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, ToSocketAddrs};
 use std::rc::{Rc, Weak};
 use std::time::{Duration, Instant};
 
-use crate::dispatch::{
-    CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId,
-};
 use crate::error::Error;
 use crate::name::{DeviceName, Location};
-use crate::net::{Core, Delivery};
-use crate::time::TimeVal;
+use crate::net::shell::Shell;
+use crate::net::Reactor;
+use crate::proto::{Delivery, Session};
+use crate::time::{Now, TimeVal};
 use crate::wire;
+use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
-pub(crate) use endpoint::Backlogged;
+pub(crate) use liveness::Liveness;
+pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
+pub use replay_control::ReplayControl;
+
+pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 
 /// Largest payload a VRPN peer can receive over TCP (64000-byte buffer less the header).
-pub const MAX_PAYLOAD: usize = wire::MAX_TCP_MESSAGE - wire::HEADER_LEN;
+pub const MAX_PAYLOAD: usize = wire::MAX_PAYLOAD;
 
-/// What a connection is doing now.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ConnectionState {
-    /// Client: trying to reach the server for the first time.
-    Connecting,
-    /// Client: connected to the server. Server: at least one peer connected. Loopback: always.
-    Connected,
-    /// Client: was connected, lost the server, and keeps trying.
-    Reconnecting,
-    /// Server: listening, no peer connected.
-    Listening,
-}
-
-/// Local connection events (sent as messages of the four `VRPN_Connection_*` types).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ConnectionEvent {
-    /// The first peer completed its handshake.
-    GotFirstConnection,
-    /// A peer completed its handshake.
-    GotConnection,
-    /// A connected peer was lost.
-    DroppedConnection,
-    /// The last connected peer was lost.
-    DroppedLastConnection,
-}
-
-impl ConnectionEvent {
-    fn type_id(self) -> TypeId {
-        TypeId(match self {
-            ConnectionEvent::GotFirstConnection => 0,
-            ConnectionEvent::GotConnection => 1,
-            ConnectionEvent::DroppedConnection => 2,
-            ConnectionEvent::DroppedLastConnection => 3,
-        })
-    }
-}
-
-/// How serious a [`Notice`] is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Severity {
-    /// For the curious (a peer with another minor version, a peer that left).
-    Info,
-    /// Something a user may need to act on (no answer from a server, a dropped peer).
-    Warning,
-    /// Something failed.
-    Error,
-}
-
-/// A diagnostic from the connection, in words a user can act on.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Notice {
-    /// How serious it is.
-    pub severity: Severity,
-    /// What happened and what to do.
-    pub text: String,
-}
-
-/// Limits and timings of a connection. The defaults suit a lab network.
-#[derive(Clone, Copy, Debug)]
-pub struct Limits {
-    /// Reliable output that may wait for one peer before the peer is dropped as not reading.
-    pub max_pending_output: usize,
-    /// Peers a server serves at once (C++: 255).
-    pub max_connections: usize,
-    /// Client: time between connection attempts (C++ 07.38 uses 2 s; the paper says 1 s).
-    pub retry_interval: Duration,
-    /// Client: when to explain that the server does not answer.
-    pub no_answer_warning: Duration,
-    /// Time allowed for a TCP connect (server call-back or TCP-only client).
-    pub connect_timeout: Duration,
-    /// Messages taken from one peer before others get their turn in a mainloop pass.
-    pub max_messages_per_peer_per_loop: usize,
-    /// Largest message payload accepted from a peer; a peer that sends a larger one is dropped
-    /// with a notice. Default: the C++ receive limit (64008 padded bytes).
-    pub max_message_payload: usize,
-    /// Sender names, and separately type names, one peer may describe (C++: 2000 each); a peer
-    /// describing more is dropped with a notice.
-    pub max_names_per_peer: usize,
-}
-
-impl Default for Limits {
-    fn default() -> Self {
-        Limits {
-            max_pending_output: 4 * 1024 * 1024,
-            max_connections: 255,
-            retry_interval: Duration::from_secs(1),
-            no_answer_warning: Duration::from_secs(3),
-            connect_timeout: Duration::from_secs(5),
-            max_messages_per_peer_per_loop: 100_000,
-            max_message_payload: wire::MAX_TCP_PADDED_PAYLOAD,
-            max_names_per_peer: wire::MAX_IDS,
-        }
-    }
+/// The protocol state and the sockets of one connection.
+struct Core {
+    session: Session,
+    shell: Shell,
 }
 
 struct Inner {
     core: RefCell<Core>,
     handlers: HandlerTable,
-    dispatching: Cell<bool>,
+    /// How many handler calls are running (a handler may cause nested deliveries).
+    depth: Cell<u32>,
+    /// The time of the pass that is delivering, so handlers that stamp replies agree with it.
+    pass_now: Cell<Option<Now>>,
     /// Local deliveries requested while a handler runs: encoded messages, delivered in order.
     deferred: RefCell<Vec<u8>>,
     deferred_scratch: RefCell<Vec<u8>>,
     notices: CallbackList<Notice>,
     peer_senders: CallbackList<str>,
+    states: CallbackList<ConnectionState>,
+    /// The liveness cycles of the remotes on this connection.
+    liveness: RefCell<Vec<Weak<Liveness>>>,
+    /// Senders whose texts the default printer shows.
+    printed: RefCell<Vec<i32>>,
 }
 
 /// A VRPN connection handle. Clones share the connection.
@@ -162,17 +94,42 @@ const DEFERRED_HEADER: usize = 4 + 4 + 8 + 8 + 4;
 /// Log bytes written per mainloop pass: bounded so logging never stalls the loop.
 const LOG_FLUSH_PER_PASS: usize = 256 * 1024;
 
+/// Resolves `host` to its first IPv4 address (at set-up, never inside a loop pass).
+pub(crate) fn resolve_v4(host: &str, port: u16) -> Result<SocketAddrV4, Error> {
+    let addrs = (host, port).to_socket_addrs().map_err(|e| Error::Resolve {
+        host: host.to_string(),
+        reason: e.to_string(),
+    })?;
+    for a in addrs {
+        if let SocketAddr::V4(v4) = a {
+            return Ok(v4);
+        }
+    }
+    Err(Error::Resolve {
+        host: host.to_string(),
+        reason: "no IPv4 address (VRPN 07 is IPv4 only)".into(),
+    })
+}
+
+fn new_reactor() -> Result<Reactor, Error> {
+    Reactor::new().map_err(|e| Error::io("creating the poll instance", e))
+}
+
 impl Connection {
-    fn from_core(core: Core) -> Connection {
+    fn from_parts(session: Session, shell: Shell) -> Connection {
         Connection {
             inner: Rc::new(Inner {
-                core: RefCell::new(core),
+                core: RefCell::new(Core { session, shell }),
                 handlers: HandlerTable::default(),
-                dispatching: Cell::new(false),
+                depth: Cell::new(0),
+                pass_now: Cell::new(None),
                 deferred: RefCell::new(Vec::with_capacity(64 * 1024)),
                 deferred_scratch: RefCell::new(Vec::with_capacity(64 * 1024)),
                 notices: CallbackList::default(),
                 peer_senders: CallbackList::default(),
+                states: CallbackList::default(),
+                liveness: RefCell::new(Vec::new()),
+                printed: RefCell::new(Vec::new()),
             }),
         }
     }
@@ -189,6 +146,18 @@ impl Connection {
 
     /// Like [`open`](Self::open) for an already parsed name.
     pub fn open_location(name: &DeviceName) -> Result<Connection, Error> {
+        Self::open_location_in(name, None)
+    }
+
+    /// Like [`open`](Self::open), with the sockets of a new client connection waiting in
+    /// `reactor` (a server loop that also reads other servers: one poll for everything). A
+    /// connection already open for the same location is shared as it is.
+    pub fn open_in(reactor: &Reactor, name: &str) -> Result<Connection, Error> {
+        let parsed = DeviceName::parse(name)?;
+        Self::open_location_in(&parsed, Some(reactor))
+    }
+
+    fn open_location_in(name: &DeviceName, reactor: Option<&Reactor>) -> Result<Connection, Error> {
         match &name.location {
             Location::Loopback => Ok(Connection::loopback()),
             Location::File { path } => {
@@ -199,7 +168,11 @@ impl Connection {
                 port,
                 tcp_only,
             } => Self::shared(&name.location_text, || {
-                Connection::client(host, *port, *tcp_only, Limits::default())
+                let reactor = match reactor {
+                    Some(r) => r.clone(),
+                    None => new_reactor()?,
+                };
+                Connection::client_in(&reactor, host, *port, *tcp_only, Limits::default())
             }),
         }
     }
@@ -228,7 +201,9 @@ impl Connection {
     /// Callbacks fire at the original pace with the original timestamps; see
     /// [`Connection::replay`] for rate, reset, play-to and jump-to.
     pub fn replay_file(path: &str) -> Result<Connection, Error> {
-        Ok(Connection::from_core(Core::file(path, Limits::default())?))
+        let replay = crate::log::replay::Replay::open(path).map_err(Error::from_log)?;
+        let session = Session::file(replay, path, Limits::default());
+        Ok(Connection::from_parts(session, Shell::none()))
     }
 
     /// A new, unshared client connection to `host:port`.
@@ -238,9 +213,21 @@ impl Connection {
         tcp_only: bool,
         limits: Limits,
     ) -> Result<Connection, Error> {
-        Ok(Connection::from_core(Core::client(
-            host, port, tcp_only, limits,
-        )?))
+        Self::client_in(&new_reactor()?, host, port, tcp_only, limits)
+    }
+
+    /// [`client`](Self::client) with its sockets waiting in `reactor`.
+    pub fn client_in(
+        reactor: &Reactor,
+        host: &str,
+        port: u16,
+        tcp_only: bool,
+        limits: Limits,
+    ) -> Result<Connection, Error> {
+        let server = resolve_v4(host, port)?;
+        let (shell, listen) = Shell::client(reactor, server, tcp_only)?;
+        let session = Session::client(server, host, listen, limits, crate::net::clock());
+        Ok(Connection::from_parts(session, shell))
     }
 
     /// A server on `port` (0 picks a free one; see [`local_port`](Self::local_port)), on every
@@ -255,7 +242,19 @@ impl Connection {
         port: u16,
         limits: Limits,
     ) -> Result<Connection, Error> {
-        Ok(Connection::from_core(Core::server(nic, port, limits)?))
+        Self::server_in(&new_reactor()?, nic, port, limits)
+    }
+
+    /// A server whose sockets wait in `reactor` (shared with the serial ports and other
+    /// connections of a server loop).
+    pub fn server_in(
+        reactor: &Reactor,
+        nic: Option<Ipv4Addr>,
+        port: u16,
+        limits: Limits,
+    ) -> Result<Connection, Error> {
+        let shell = Shell::server(reactor, nic, port)?;
+        Ok(Connection::from_parts(Session::server(limits, nic), shell))
     }
 
     /// The in-process connection of this thread (`loopback:`): no sockets, always connected.
@@ -264,7 +263,7 @@ impl Connection {
             if let Some(inner) = l.borrow().upgrade() {
                 return Connection { inner };
             }
-            let conn = Connection::from_core(Core::loopback(Limits::default()));
+            let conn = Connection::new_loopback();
             *l.borrow_mut() = Rc::downgrade(&conn.inner);
             conn
         })
@@ -272,7 +271,7 @@ impl Connection {
 
     /// A new private in-process connection, not shared through `loopback:`.
     pub fn new_loopback() -> Connection {
-        Connection::from_core(Core::loopback(Limits::default()))
+        Connection::from_parts(Session::loopback(Limits::default()), Shell::none())
     }
 
     /// A number identifying this connection while it exists.
@@ -285,53 +284,65 @@ impl Connection {
         Rc::ptr_eq(&self.inner, &other.inner)
     }
 
+    /// The reactor this connection's sockets wait in (none for loopback and replay).
+    pub fn reactor(&self) -> Option<Reactor> {
+        self.inner.core.borrow().shell.reactor().cloned()
+    }
+
+    /// The current time: the time of the running pass while handlers run (so every reply a
+    /// pass sends carries the same time), the clock otherwise.
+    pub fn now(&self) -> Now {
+        self.inner.pass_now.get().unwrap_or_else(crate::net::clock)
+    }
+
     // -------------------------------------------------------------- names
 
     /// Registers (or finds) a sender name and describes it to connected peers.
     pub fn register_sender(&self, name: &str) -> Result<SenderId, Error> {
-        let mut core = self.inner.core.borrow_mut();
-        let (id, new) = core.names.senders.register(name)?;
-        if new {
-            core.describe_to_all(true, id);
-        }
+        let now = self.now();
+        let id = self
+            .inner
+            .core
+            .borrow_mut()
+            .session
+            .register(now, true, name.as_bytes())?;
         Ok(SenderId(id))
     }
 
     /// Registers (or finds) a message type name and describes it to connected peers.
     pub fn register_type(&self, name: &str) -> Result<TypeId, Error> {
-        let mut core = self.inner.core.borrow_mut();
-        let (id, new) = core.names.types.register(name)?;
-        if new {
-            core.describe_to_all(false, id);
-        }
+        let now = self.now();
+        let id = self
+            .inner
+            .core
+            .borrow_mut()
+            .session
+            .register(now, false, name.as_bytes())?;
         Ok(TypeId(id))
     }
 
-    /// The name of a local sender id.
+    /// The name of a local sender id (bytes that are not UTF-8 are shown as U+FFFD).
     pub fn sender_name(&self, id: SenderId) -> Option<String> {
-        self.inner
-            .core
-            .borrow()
-            .names
-            .senders
-            .name(id.0)
-            .map(str::to_string)
+        let core = self.inner.core.borrow();
+        core.session
+            .name_of(true, id.0)
+            .map(|n| String::from_utf8_lossy(n).into_owned())
     }
 
-    /// The name of a local type id.
+    /// The name of a local type id (bytes that are not UTF-8 are shown as U+FFFD).
     pub fn type_name(&self, id: TypeId) -> Option<String> {
-        self.inner
-            .core
-            .borrow()
-            .names
-            .types
-            .name(id.0)
-            .map(str::to_string)
+        let core = self.inner.core.borrow();
+        core.session
+            .name_of(false, id.0)
+            .map(|n| String::from_utf8_lossy(n).into_owned())
     }
 
     // -------------------------------------------------------------- handlers
 
     /// Calls `f` for each message of `type_id` from the senders `sender` selects.
+    ///
+    /// To answer from inside `f`, use [`Message::connection`]: a `Connection` clone captured
+    /// by `f` would keep this connection alive as long as `f` is registered on it.
     pub fn register_handler(
         &self,
         type_id: TypeId,
@@ -350,24 +361,37 @@ impl Connection {
         self.inner.handlers.add(None, sender, f)
     }
 
-    /// Removes a handler.
+    /// Removes a handler or callback registered on this connection (message handlers,
+    /// [`on_event`](Self::on_event), [`on_notice`](Self::on_notice),
+    /// [`on_peer_sender`](Self::on_peer_sender), [`on_state_change`](Self::on_state_change)).
+    /// Returns whether it was found.
     pub fn remove_handler(&self, id: HandlerId) -> bool {
         self.inner.handlers.remove(id)
+            || self.inner.notices.remove(id)
+            || self.inner.peer_senders.remove(id)
+            || self.inner.states.remove(id)
     }
 
     /// Calls `f` on a local connection event.
     pub fn on_event(&self, event: ConnectionEvent, mut f: impl FnMut() + 'static) -> HandlerId {
-        self.register_handler(event.type_id(), SenderFilter::Any, move |_| f())
+        self.register_handler(TypeId(event.type_id()), SenderFilter::Any, move |_| f())
     }
 
-    /// Receives this connection's diagnostics. Without any handler they go to stderr.
+    /// Receives this connection's diagnostics. Without any handler they go to the default
+    /// printer (see [`set_text_printer`]).
     pub fn on_notice(&self, f: impl FnMut(&Notice) + 'static) -> HandlerId {
         self.inner.notices.add(f)
     }
 
-    /// Calls `f` with each sender name a peer describes for the first time.
+    /// Calls `f` with each sender name a peer offers, when it is first described.
     pub fn on_peer_sender(&self, f: impl FnMut(&str) + 'static) -> HandlerId {
         self.inner.peer_senders.add(f)
+    }
+
+    /// Calls `f` whenever [`state`](Self::state) changes (Connecting → Connected →
+    /// Reconnecting → Connected …, or Listening ↔ Connected for a server).
+    pub fn on_state_change(&self, f: impl FnMut(&ConnectionState) + 'static) -> HandlerId {
+        self.inner.states.add(f)
     }
 
     // -------------------------------------------------------------- sending
@@ -375,7 +399,9 @@ impl Connection {
     /// Sends a message to every connected peer and to local handlers.
     ///
     /// `class_of_service` is a mask of [`wire::class`] bits: RELIABLE goes over TCP, anything
-    /// else over UDP once the peer announced a UDP port. Allocation-free.
+    /// else over UDP once the peer announced a UDP port. A peer that has not completed its
+    /// handshake does not get the message (as in C++); see [`connected`](Self::connected).
+    /// Allocation-free.
     pub fn pack_message(
         &self,
         time: TimeVal,
@@ -387,21 +413,26 @@ impl Connection {
         if payload.len() > MAX_PAYLOAD {
             return Err(Error::PayloadTooLarge(payload.len()));
         }
-        self.inner.core.borrow_mut().pack_to_peers(
-            time,
-            sender.0,
-            type_id.0,
-            payload,
-            class_of_service,
-        );
+        {
+            let mut core = self.inner.core.borrow_mut();
+            let overflowed =
+                core.session
+                    .pack(time, sender.0, type_id.0, payload, class_of_service);
+            if overflowed {
+                // Rare: a peer is not reading. Only now is the time needed (for the drop).
+                let now = self.inner.pass_now.get().unwrap_or_else(crate::net::clock);
+                core.session.drop_backlogged(now);
+            }
+        }
         if self.inner.handlers.has_handlers(type_id) {
             let msg = Message {
                 time,
                 sender,
                 type_id,
                 payload,
+                conn: self,
             };
-            if self.inner.dispatching.get() {
+            if self.inner.depth.get() > 0 {
                 self.defer(&msg);
             } else {
                 self.deliver(&msg);
@@ -420,13 +451,16 @@ impl Connection {
         q.extend_from_slice(msg.payload);
     }
 
-    /// Delivers one message to handlers, then everything handlers queued meanwhile.
+    /// Delivers one message to handlers, then (at the outermost level) everything handlers
+    /// queued meanwhile.
     fn deliver(&self, msg: &Message<'_>) {
-        self.inner.dispatching.set(true);
+        let depth = self.inner.depth.get();
+        self.inner.depth.set(depth + 1);
         self.inner.handlers.dispatch(msg);
-        if self.inner.deferred.borrow().is_empty() {
-            // The common case: no handler sent anything to local handlers.
-            self.inner.dispatching.set(false);
+        self.inner.depth.set(depth);
+        if depth > 0 || self.inner.deferred.borrow().is_empty() {
+            // Nested (the outer delivery drains the queue), or the common case: no handler
+            // sent anything to local handlers.
             return;
         }
         let mut cursor = 0;
@@ -457,12 +491,15 @@ impl Connection {
             };
             match next {
                 Some((type_id, sender, time)) => {
+                    self.inner.depth.set(1);
                     self.inner.handlers.dispatch(&Message {
                         time,
                         sender: SenderId(sender),
                         type_id: TypeId(type_id),
                         payload: &scratch,
+                        conn: self,
                     });
+                    self.inner.depth.set(0);
                     *self.inner.deferred_scratch.borrow_mut() = scratch;
                 }
                 None => {
@@ -472,30 +509,141 @@ impl Connection {
             }
         }
         self.inner.deferred.borrow_mut().clear();
-        self.inner.dispatching.set(false);
     }
 
     // -------------------------------------------------------------- the loop
 
     /// Does all pending work without blocking: accepts and (re)connects peers, reads and
-    /// dispatches every message that arrived, and writes queued output.
+    /// dispatches every message that arrived, runs the remotes' liveness pings, and writes
+    /// queued output. Reads the clock once.
     ///
-    /// Called from inside a callback it returns at once (the outer call does the work).
+    /// One call serves every device on this connection (remotes sharing a connection need
+    /// only one of them called). Called from inside a callback it returns at once (the outer
+    /// call does the work).
     pub fn mainloop(&self) -> Result<(), Error> {
-        if self.inner.dispatching.get() {
+        if self.inner.depth.get() > 0 {
             return Ok(());
         }
+        if let Some(r) = self.reactor() {
+            r.poll_now().map_err(|e| Error::io("polling sockets", e))?;
+        }
+        let now = crate::net::clock();
+        self.inner.pass_now.set(Some(now));
         {
             let mut core = self.inner.core.borrow_mut();
-            core.poll_io(Some(Duration::ZERO))?;
-            core.service_setup();
-            core.begin_pass();
+            let Core { session, shell } = &mut *core;
+            shell.service(now, session);
+            if session.poll_timeout().is_some_and(|t| now.mono >= t) {
+                session.handle_timeout(now);
+                shell.carry_out(now, session);
+            }
+            session.begin_pass(now);
         }
-        self.pump();
-        let mut core = self.inner.core.borrow_mut();
-        core.flush();
-        core.flush_logs_some(LOG_FLUSH_PER_PASS);
+        self.pump(now);
+        self.run_liveness(now);
+        {
+            let mut core = self.inner.core.borrow_mut();
+            let Core { session, shell } = &mut *core;
+            shell.flush(now, session);
+            session.flush_logs_some(LOG_FLUSH_PER_PASS);
+        }
+        // Deliveries queued by the flush (a peer that failed on write).
+        self.pump(now);
+        self.inner.pass_now.set(None);
         Ok(())
+    }
+
+    /// Takes deliveries from the session and hands them to handlers, reading more from the
+    /// sockets whenever the session runs dry, until nothing more arrives.
+    fn pump(&self, now: Now) {
+        loop {
+            let next = self.inner.core.borrow_mut().session.poll_delivery(now);
+            let Some(d) = next else {
+                let mut core = self.inner.core.borrow_mut();
+                let Core { session, shell } = &mut *core;
+                shell.carry_out(now, session);
+                if shell.read(now, session) {
+                    continue;
+                }
+                if session.has_deliveries() {
+                    continue;
+                }
+                break;
+            };
+            self.dispatch_delivery(now, d);
+        }
+    }
+
+    fn dispatch_delivery(&self, now: Now, d: Delivery) {
+        match d {
+            Delivery::Message {
+                time,
+                sender,
+                type_id,
+                len,
+            } => {
+                let scratch = self.inner.core.borrow_mut().session.take_scratch();
+                self.deliver(&Message {
+                    time,
+                    sender: SenderId(sender),
+                    type_id: TypeId(type_id),
+                    payload: &scratch[..len],
+                    conn: self,
+                });
+                self.inner
+                    .core
+                    .borrow_mut()
+                    .session
+                    .restore_scratch(scratch);
+            }
+            Delivery::Event(ev) => {
+                self.liveness_event(now, ev);
+                self.deliver(&Message {
+                    time: now.wall,
+                    sender: SenderId(0),
+                    type_id: TypeId(ev.type_id()),
+                    payload: &[],
+                    conn: self,
+                });
+            }
+            Delivery::Notice(n) => self.dispatch_notice(n),
+            Delivery::PeerSender(local) => {
+                if let Some(name) = self.sender_name(SenderId(local)) {
+                    self.inner.peer_senders.call(name.as_str());
+                }
+            }
+            Delivery::State(s) => self.inner.states.call(&s),
+            Delivery::PeerSendersComplete => self.check_wanted_devices(),
+        }
+    }
+
+    /// Hands a notice to the notice callbacks, or to the default printer when there are none.
+    pub(crate) fn dispatch_notice(&self, n: crate::proto::Notice) {
+        if self.inner.notices.is_empty() {
+            printer::print_notice(&n);
+        } else {
+            self.inner.notices.call(&n);
+        }
+    }
+
+    /// Prints text messages from `sender` with the default printer (once per connection and
+    /// sender; see [`set_text_printer`]).
+    pub(crate) fn attach_text_printer(&self, sender: SenderId, text_type: TypeId) {
+        {
+            let mut printed = self.inner.printed.borrow_mut();
+            if printed.contains(&sender.0) {
+                return;
+            }
+            printed.push(sender.0);
+        }
+        let name = self.sender_name(sender).unwrap_or_default();
+        self.register_handler(text_type, SenderFilter::Only(sender), move |m| {
+            if let Ok(t) = wire::payload::text::TextMessage::decode(m.payload) {
+                let severity = wire::payload::text::TextSeverity::from_code(t.severity);
+                let text = String::from_utf8_lossy(t.text);
+                printer::print_text(&name, severity, t.level, &text);
+            }
+        });
     }
 
     // -------------------------------------------------------------- logging
@@ -504,172 +652,175 @@ impl Connection {
     /// existing file is never overwritten). A client logs into one file across reconnects; a
     /// server opens one file per client, `in.vrpn` → `in-1.vrpn`, `in-2.vrpn`, … (`-li`).
     pub fn log_incoming(&self, path: &str) -> Result<(), Error> {
-        self.inner.core.borrow_mut().log_incoming(path)
+        let mut core = self.inner.core.borrow_mut();
+        if core.shell.server_port().is_some() {
+            let template = path.to_string();
+            core.session.set_incoming_log(
+                None,
+                Some(Box::new(move |n| {
+                    crate::log::open_sink(&compound_log_name(&template, n))
+                        .map_err(|e| e.to_string())
+                })),
+            );
+        } else {
+            let sink = crate::log::open_sink(path).map_err(Error::from_log)?;
+            core.session.set_incoming_log(Some(sink), None);
+        }
+        Ok(())
     }
 
     /// Logs every message this side sends (descriptions included) to a new file at `path`
     /// (`-lo`). A server logs from now on, clients connected or not.
     pub fn log_outgoing(&self, path: &str) -> Result<(), Error> {
-        self.inner.core.borrow_mut().log_outgoing(path)
+        let sink = crate::log::open_sink(path).map_err(Error::from_log)?;
+        self.inner.core.borrow_mut().session.set_outgoing_log(sink);
+        Ok(())
     }
 
     /// Writes all buffered log data now (`vrpn_server -flush` calls it every pass). Otherwise
     /// each `mainloop()` writes a bounded amount and the rest goes out when the connection
     /// closes.
     pub fn flush_logs(&self) -> Result<(), Error> {
-        self.inner.core.borrow_mut().flush_logs_all()
+        self.inner
+            .core
+            .borrow_mut()
+            .session
+            .flush_logs_all()
+            .map_err(Error::Log)
     }
 
     /// Ends logging: writes the closing DISCONNECT entry of an outgoing log and flushes.
     pub fn close_logs(&self) -> Result<(), Error> {
-        self.inner.core.borrow_mut().close_logs()
-    }
-
-    /// Replay controls, when this connection replays a log file.
-    pub fn replay(&self) -> Option<ReplayControl<'_>> {
+        let now = self.now();
         self.inner
             .core
             .borrow_mut()
-            .replay_mut()
-            .is_some()
-            .then_some(ReplayControl { conn: self })
+            .session
+            .close_logs(now)
+            .map_err(Error::Log)
     }
 
-    /// True when this connection replays a log file.
-    pub fn is_replay(&self) -> bool {
-        self.inner.core.borrow_mut().replay_mut().is_some()
+    // -------------------------------------------------------------- waiting
+
+    /// When this connection next has time-driven work (a connection attempt, a greeting
+    /// time-out, a liveness ping), if ever. A loop that waits on several connections sleeps
+    /// until the earliest of theirs.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        let session = self.inner.core.borrow().session.poll_timeout();
+        let pings = self.liveness_deadline();
+        match (session, pings) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
-    fn with_replay<T>(&self, f: impl FnOnce(&mut crate::log::replay::Replay) -> T) -> T {
-        let mut core = self.inner.core.borrow_mut();
-        f(core.replay_mut().expect("a replay connection"))
-    }
-
-    /// Blocks until a socket of this connection is ready or `timeout` passes (or a client's
-    /// next connection attempt is due). Dispatches nothing: call [`mainloop`](Self::mainloop)
-    /// next. Returns whether a socket became ready.
+    /// Blocks until a socket of this connection is ready or `timeout` passes (or its next
+    /// time-driven work is due). Dispatches nothing: call [`mainloop`](Self::mainloop) next.
+    /// Returns whether a socket became ready.
     pub fn wait(&self, timeout: Duration) -> Result<bool, Error> {
-        let timeout = {
-            let core = self.inner.core.borrow();
-            match core.next_deadline() {
-                Some(d) => timeout.min(d.saturating_duration_since(Instant::now())),
-                None => timeout,
-            }
-        };
-        self.inner.core.borrow_mut().poll_io(Some(timeout))
+        self.wait_until(None, timeout)
     }
 
-    /// Blocks until a socket is ready, `deadline` passes (woken precisely, not on a
-    /// millisecond grid), or `max` elapses. Dispatches nothing: call
-    /// [`mainloop`](Self::mainloop) next. This is how a server sleeps until its next device
-    /// report without spinning a core.
+    /// Blocks until a socket is ready, `deadline` or this connection's own next deadline
+    /// passes (woken precisely, not on a millisecond grid), or `max` elapses. Dispatches
+    /// nothing: call [`mainloop`](Self::mainloop) next. This is how a server sleeps until its
+    /// next device report without spinning a core.
     pub fn wait_until(&self, deadline: Option<Instant>, max: Duration) -> Result<bool, Error> {
-        let mut core = self.inner.core.borrow_mut();
-        let deadline = match (deadline, core.next_deadline()) {
+        let deadline = match (deadline, self.poll_timeout()) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         };
-        core.wait_until(deadline, max)
-    }
-
-    /// True once since the last call if data arrived on any socket (for busy-poll windows).
-    pub fn take_activity(&self) -> bool {
-        std::mem::take(&mut self.inner.core.borrow_mut().activity)
-    }
-
-    fn pump(&self) {
-        loop {
-            let next = self.inner.core.borrow_mut().next_delivery();
-            let Some(d) = next else {
-                break;
-            };
-            match d {
-                Delivery::Message {
-                    time,
-                    sender,
-                    type_id,
-                    len,
-                } => {
-                    let scratch = std::mem::take(&mut self.inner.core.borrow_mut().scratch);
-                    self.deliver(&Message {
-                        time,
-                        sender: SenderId(sender),
-                        type_id: TypeId(type_id),
-                        payload: &scratch[..len],
-                    });
-                    self.inner.core.borrow_mut().scratch = scratch;
+        match self.reactor() {
+            Some(r) => r
+                .wait(deadline, max)
+                .map_err(|e| Error::io("polling sockets", e)),
+            None => {
+                // Nothing to wait on but time.
+                let until = deadline
+                    .map_or(max, |d| d.saturating_duration_since(Instant::now()))
+                    .min(max);
+                if !until.is_zero() {
+                    std::thread::sleep(until);
                 }
-                Delivery::Event(ev) => {
-                    self.deliver(&Message {
-                        time: TimeVal::now(),
-                        sender: SenderId(0),
-                        type_id: ev.type_id(),
-                        payload: &[],
-                    });
-                }
-                Delivery::Notice(n) => {
-                    if self.inner.notices.is_empty() {
-                        eprintln!("vrpn: {}", n.text);
-                    } else {
-                        self.inner.notices.call(&n);
-                    }
-                }
-                Delivery::PeerSender(local) => {
-                    let name = self.sender_name(SenderId(local));
-                    if let Some(name) = name {
-                        self.inner.peer_senders.call(name.as_str());
-                    }
-                }
+                Ok(false)
             }
         }
+    }
+
+    /// True once since the last call if data arrived on any socket of this connection's
+    /// reactor (for busy-poll windows).
+    pub fn take_activity(&self) -> bool {
+        self.reactor().is_some_and(|r| r.take_activity())
     }
 
     // -------------------------------------------------------------- state
 
     /// What the connection is doing now.
     pub fn state(&self) -> ConnectionState {
-        self.inner.core.borrow().state()
+        self.inner.core.borrow().session.state()
     }
 
-    /// True when at least one peer is connected (always for loopback).
+    /// True when at least one peer is connected (always for loopback and replay).
     pub fn connected(&self) -> bool {
         self.state() == ConnectionState::Connected
     }
 
     /// Number of peers that completed the handshake.
     pub fn connected_peers(&self) -> usize {
-        self.inner.core.borrow().connected
+        self.inner.core.borrow().session.connected_peers()
     }
 
     /// Address and VRPN version of each connected peer.
     pub fn peers(&self) -> Vec<(String, Option<String>)> {
-        self.inner.core.borrow().peer_descriptions()
+        self.inner.core.borrow().session.peer_descriptions()
     }
 
     /// The port a server listens on.
     pub fn local_port(&self) -> Option<u16> {
-        self.inner.core.borrow().server_port()
+        self.inner.core.borrow().shell.server_port()
     }
 
-    /// Sender names the connected peers have described (device names, for a server).
+    /// Sender names the connected peers offer: the devices of a server (for a client), the
+    /// remotes of a client (for a server). Names this side described to a peer and the peer
+    /// echoed back are not included.
     pub fn peer_senders(&self) -> Vec<String> {
-        self.inner.core.borrow().peer_sender_names()
+        self.inner.core.borrow().session.peer_sender_names()
     }
 
     /// Reliable bytes queued for peers and not yet written.
     pub fn pending_output(&self) -> usize {
-        self.inner.core.borrow().pending_output()
+        self.inner.core.borrow().session.pending_output()
     }
 
     /// Sends a text message (`vrpn_Base text_message`) from `sender`.
     pub fn send_text(
         &self,
         sender: SenderId,
-        severity: crate::devices::text::TextSeverity,
+        severity: crate::wire::payload::text::TextSeverity,
         level: u32,
         text: &str,
     ) -> Result<(), Error> {
-        crate::devices::base::send_text(self, sender, severity, level, text)
+        use wire::payload::text::{TextMessage, TEXT_MESSAGE, TEXT_PAYLOAD_LEN};
+        let text_type = self.register_type(TEXT_MESSAGE)?;
+        let mut buf = [0u8; TEXT_PAYLOAD_LEN];
+        let n = TextMessage::new(severity.code(), level, text.as_bytes())
+            .map_err(|_| Error::PayloadTooLarge(text.len() + 9))?
+            .encode(&mut buf);
+        let now = self.now();
+        self.pack_message(
+            now.wall,
+            text_type,
+            sender,
+            &buf[..n],
+            wire::class::RELIABLE,
+        )
+    }
+
+    /// A handle that does not keep the connection alive.
+    pub fn downgrade(&self) -> WeakConnection {
+        WeakConnection {
+            inner: Rc::downgrade(&self.inner),
+        }
     }
 }
 
@@ -686,105 +837,17 @@ impl WeakConnection {
     }
 }
 
-impl Connection {
-    /// A handle that does not keep the connection alive.
-    pub fn downgrade(&self) -> WeakConnection {
-        WeakConnection {
-            inner: Rc::downgrade(&self.inner),
-        }
+impl Drop for Inner {
+    fn drop(&mut self) {
+        let core = self.core.get_mut();
+        let _ = core.session.close_logs(crate::net::clock());
     }
 }
 
-/// Controls of a log replay (C++ `vrpn_File_Connection`), borrowed from its connection.
-pub struct ReplayControl<'a> {
-    conn: &'a Connection,
-}
-
-impl ReplayControl<'_> {
-    /// Sets the speed: 1.0 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as
-    /// fast as possible.
-    pub fn set_rate(&self, rate: f64) {
-        self.conn.with_replay(|r| r.set_rate(rate));
-    }
-
-    /// The speed factor.
-    pub fn rate(&self) -> f64 {
-        self.conn.with_replay(|r| r.rate())
-    }
-
-    /// Back to the start (handlers see a dropped-connection event, as in C++).
-    pub fn reset(&self) {
-        self.conn.with_replay(|r| r.reset());
-        self.conn.pump();
-    }
-
-    /// Plays, now, every message up to `secs` after the first one (rewinding first when that
-    /// is behind the current position).
-    pub fn play_to_time(&self, secs: f64) {
-        self.conn.with_replay(|r| r.play_to_time(secs));
-        self.conn.pump();
-    }
-
-    /// Plays the next message now, whatever its time. Returns false at the end of the file.
-    pub fn play_one(&self) -> bool {
-        if self.eof() {
-            return false;
-        }
-        self.conn.with_replay(|r| r.play_one());
-        self.conn.pump();
-        true
-    }
-
-    /// Moves to `secs` after the first message without delivering the messages in between
-    /// (descriptions on the way are still learned). Returns whether that time is in the log.
-    pub fn jump_to_time(&self, secs: f64) -> bool {
-        let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
-        self.conn.skip_due();
-        inside
-    }
-
-    /// True when every message has been played.
-    pub fn eof(&self) -> bool {
-        self.conn.with_replay(|r| r.eof())
-    }
-
-    /// Where the replay stands, on the log's own clock.
-    pub fn file_time(&self) -> TimeVal {
-        self.conn.with_replay(|r| r.file_time())
-    }
-
-    /// Seconds since the first message.
-    pub fn elapsed(&self) -> f64 {
-        self.conn.with_replay(|r| r.elapsed())
-    }
-
-    /// Time of the first user message.
-    pub fn first_time(&self) -> Option<TimeVal> {
-        self.conn.with_replay(|r| r.first_time())
-    }
-
-    /// Time of the last user message.
-    pub fn last_time(&self) -> Option<TimeVal> {
-        self.conn.with_replay(|r| r.last_time())
-    }
-
-    /// Seconds between the first and last user messages.
-    pub fn length_secs(&self) -> f64 {
-        self.conn.with_replay(|r| r.length_secs())
-    }
-}
-
-impl Connection {
-    /// Consumes due replay entries without delivering user messages (jump).
-    fn skip_due(&self) {
-        loop {
-            let d = self.inner.core.borrow_mut().next_delivery();
-            match d {
-                None => break,
-                Some(Delivery::Message { .. }) => {}
-                Some(Delivery::Notice(n)) => self.inner.notices.call(&n),
-                Some(_) => {}
-            }
-        }
+/// `in.vrpn` → `in-3.vrpn`: `-N` before the last `.` (appended when there is none), as C++.
+pub(crate) fn compound_log_name(template: &str, n: u32) -> String {
+    match template.rfind('.') {
+        Some(i) => format!("{}-{n}{}", &template[..i], &template[i..]),
+        None => format!("{template}-{n}"),
     }
 }

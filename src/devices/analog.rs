@@ -5,15 +5,15 @@
 use std::cell::{Cell, RefCell};
 use std::ops::Deref;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
-use super::ServerDevice;
+use super::{Cadence, ServerDevice};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, TypeId};
 use crate::error::Error;
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 use crate::wire::class;
 use crate::wire::payload::analog as codec;
 
@@ -217,7 +217,7 @@ impl AnalogServer {
         let mut buf = [0u8; codec::channels_len(CHANNEL_MAX)];
         let len = codec::encode_channels(&self.channels[..self.num], &mut buf);
         self.conn.pack_message(
-            time.unwrap_or_else(TimeVal::now),
+            time.unwrap_or_else(|| self.conn.now().wall),
             self.ids.channel,
             self.base.sender,
             &buf[..len],
@@ -250,9 +250,8 @@ impl AnalogServer {
 pub struct AnalogExample {
     server: AnalogServer,
     name: String,
-    period: Option<Duration>,
-    next: Instant,
-    started: Instant,
+    cadence: Cadence,
+    started: Option<Instant>,
 }
 
 impl AnalogExample {
@@ -263,13 +262,11 @@ impl AnalogExample {
         channels: usize,
         rate: f64,
     ) -> Result<AnalogExample, Error> {
-        let now = Instant::now();
         Ok(AnalogExample {
             server: AnalogServer::new(device, conn, channels)?,
             name: device.to_string(),
-            period: (rate > 0.0 && rate.is_finite()).then(|| Duration::from_secs_f64(1.0 / rate)),
-            next: now,
-            started: now,
+            cadence: Cadence::per_second(rate),
+            started: None,
         })
     }
 
@@ -289,28 +286,25 @@ impl ServerDevice for AnalogExample {
         &self.name
     }
 
-    fn mainloop(&mut self, now: Instant) {
-        let Some(period) = self.period else { return };
-        if now < self.next {
+    fn mainloop(&mut self, now: Now) {
+        let first = self.cadence.is_first();
+        if !self.cadence.due(now.mono) {
             return;
         }
-        let t = now.duration_since(self.started).as_secs_f64();
+        let started = *self.started.get_or_insert(now.mono);
+        let t = now.mono.duration_since(started).as_secs_f64();
         for (i, v) in self.server.channels_mut().iter_mut().enumerate() {
             *v = Self::value_at(i, t);
         }
         // The first report always goes out (all-zero channels at t = 0 included).
-        if self.next == self.started {
-            let _ = self.server.report(None);
+        if first {
+            let _ = self.server.report(Some(now.wall));
         } else {
-            let _ = self.server.report_changes(None);
-        }
-        self.next += period;
-        if self.next <= now {
-            self.next = now + period;
+            let _ = self.server.report_changes(Some(now.wall));
         }
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.period.map(|_| self.next)
+        self.cadence.deadline()
     }
 }

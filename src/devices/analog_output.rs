@@ -167,7 +167,7 @@ impl AnalogOutputServer {
                 let mut buf = [0u8; codec::NumChannelsReport::LEN];
                 codec::NumChannelsReport { num_channels: num }.encode(&mut buf);
                 let _ = c.pack_message(
-                    TimeVal::now(),
+                    c.now().wall,
                     ids.num_channels_report,
                     sender,
                     &buf,
@@ -259,7 +259,7 @@ impl AnalogOutputServer {
         }
         .encode(&mut buf);
         self.conn.pack_message(
-            TimeVal::now(),
+            self.conn.now().wall,
             self.ids.num_channels_report,
             self.base.sender,
             &buf,

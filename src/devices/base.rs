@@ -3,13 +3,11 @@
 //! default printer of warnings and errors. [`RemoteCore`] bundles what every client half
 //! repeats; [`register_server`] the registration every server half starts with.
 
-use std::cell::{Cell, RefCell};
-use std::collections::HashSet;
+use std::cell::RefCell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
 
-use super::text::{decode_text, encode_text, TextSeverity, TEXT_PAYLOAD_LEN};
-use crate::connection::{Connection, ConnectionEvent};
+use super::text::TextSeverity;
+use crate::connection::{Connection, Liveness};
 use crate::dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 use crate::error::Error;
 use crate::name::DeviceName;
@@ -61,180 +59,75 @@ pub fn send_text(
     level: u32,
     text: &str,
 ) -> Result<(), Error> {
-    let text_type = conn.register_type(TEXT_MESSAGE)?;
-    let mut buf = [0u8; TEXT_PAYLOAD_LEN];
-    if encode_text(&mut buf, severity, level, text).is_none() {
-        return Err(Error::PayloadTooLarge(text.len() + 9));
-    }
-    conn.pack_message(TimeVal::now(), text_type, sender, &buf, class::RELIABLE)
-}
-
-thread_local! {
-    /// (connection address, sender) pairs that already have the default printer.
-    static PRINTERS: RefCell<HashSet<(usize, i32)>> = RefCell::new(HashSet::new());
-    static PRINT_THRESHOLD: Cell<TextSeverity> = const { Cell::new(TextSeverity::Warning) };
+    conn.send_text(sender, severity, level, text)
 }
 
 /// Sets the lowest severity the default printer shows (`vrpn_server -v` shows everything).
-pub fn set_print_threshold(severity: TextSeverity) {
-    PRINT_THRESHOLD.with(|t| t.set(severity));
-}
+pub use crate::connection::set_print_threshold;
 
-/// Attaches the default printer for text from `sender` (once per connection and sender), which
-/// prints warnings and errors to stdout the way C++ does:
-/// `VRPN Warning` then ` (LEVEL) from SENDER: TEXT`.
+/// Attaches the default printer for text from the device (once per connection and sender;
+/// see [`crate::connection::set_text_printer`] for where it writes).
 pub fn attach_default_printer(conn: &Connection, ids: &BaseIds) {
-    let key = (conn_key(conn), ids.sender.0);
-    let fresh = PRINTERS.with(|p| p.borrow_mut().insert(key));
-    if !fresh {
-        return;
-    }
-    let name = conn.sender_name(ids.sender).unwrap_or_default();
-    conn.register_handler(ids.text, SenderFilter::Only(ids.sender), move |m| {
-        if let Some((sev, level, text)) = decode_text(m.payload) {
-            if sev >= PRINT_THRESHOLD.with(Cell::get) {
-                println!("{}\n ({level}) from {name}: {text}", sev.heading());
-            }
-        }
-    });
-}
-
-fn conn_key(conn: &Connection) -> usize {
-    conn.identity()
+    conn.attach_text_printer(ids.sender, ids.text);
 }
 
 /// Server half: answers each ping from the device's own sender with a pong.
 pub fn serve_pings(conn: &Connection, ids: &BaseIds) {
-    let weak = conn.downgrade();
     let ids = *ids;
-    conn.register_handler(ids.ping, SenderFilter::Only(ids.sender), move |_| {
-        if let Some(c) = weak.upgrade() {
-            let _ = c.pack_message(TimeVal::now(), ids.pong, ids.sender, &[], class::RELIABLE);
-        }
+    conn.register_handler(ids.ping, SenderFilter::Only(ids.sender), move |m| {
+        let c = m.connection();
+        let _ = c.pack_message(c.now().wall, ids.pong, ids.sender, &[], class::RELIABLE);
     });
 }
 
-/// Remote half: the ping cycle that tells whether the server is alive.
+/// Remote half: the liveness cycle that tells whether the server's device answers (pings
+/// every second while unanswered; "No response from server" texts after 3 s and 10 s).
+///
+/// The cycle runs inside the connection's `mainloop()`, so any remote's `mainloop()` (or the
+/// connection's) keeps every remote's cycle going, and a server loop sleeps only until the
+/// next ping is due.
 pub struct PingCycle {
-    ids: BaseIds,
-    state: Rc<PingState>,
-}
-
-#[derive(Default)]
-struct PingState {
-    started: Cell<bool>,
-    unanswered: Cell<bool>,
-    flatlined: Cell<bool>,
-    cycle_start: Cell<Option<Instant>>,
-    last_ping: Cell<Option<Instant>>,
-    /// Set by a dropped-connection event: begin a new cycle on the next mainloop.
-    restart: Cell<bool>,
-    last_pong: Cell<Option<TimeVal>>,
-    /// Suppresses the warning texts (pings still go out).
-    pub(crate) shutup: Cell<bool>,
+    state: Rc<Liveness>,
 }
 
 impl PingCycle {
-    /// Registers the pong and dropped-connection handlers.
+    /// Starts the cycle of the device `ids.sender` on `conn` (registers its pong handler).
     pub fn new(conn: &Connection, ids: BaseIds) -> PingCycle {
-        let state = Rc::new(PingState::default());
-        let (s, weak) = (state.clone(), conn.downgrade());
+        let state = Rc::new(Liveness {
+            device: conn.sender_name(ids.sender).unwrap_or_default(),
+            sender: ids.sender,
+            ping: ids.ping,
+            cycle: RefCell::new(crate::proto::ping::PingCycle::new()),
+            started: std::cell::Cell::new(false),
+        });
+        conn.watch_liveness(&state);
+        let s = Rc::downgrade(&state);
         conn.register_handler(ids.pong, SenderFilter::Only(ids.sender), move |m| {
-            s.last_pong.set(Some(m.time));
-            if s.unanswered.replace(false) && s.flatlined.replace(false) {
-                if let Some(c) = weak.upgrade() {
-                    let _ = send_text(
-                        &c,
-                        ids.sender,
-                        TextSeverity::Error,
-                        0,
-                        "Server connection re-established!",
-                    );
-                }
+            if let Some(s) = s.upgrade() {
+                s.pong(m.connection(), m.time);
             }
         });
-        let s = state.clone();
-        conn.on_event(ConnectionEvent::DroppedConnection, move || {
-            if !s.unanswered.get() {
-                s.restart.set(true);
-            }
-        });
-        PingCycle { ids, state }
+        PingCycle { state }
     }
 
-    /// Runs the cycle: call once per remote mainloop.
-    pub fn poll(&self, conn: &Connection) {
-        if conn.is_replay() {
-            return; // nobody answers pings in a log
-        }
-        let now = Instant::now();
-        let st = &self.state;
-        if !st.started.get() || st.restart.replace(false) {
-            st.started.set(true);
-            st.unanswered.set(true);
-            st.cycle_start.set(Some(now));
-            st.last_ping.set(Some(now));
-            self.ping(conn);
-            return;
-        }
-        if !st.unanswered.get() {
-            return;
-        }
-        let last = st.last_ping.get().unwrap_or(now);
-        if now.duration_since(last) < Duration::from_secs(1) {
-            return;
-        }
-        st.last_ping.set(Some(now));
-        self.ping(conn);
-        if st.shutup.get() {
-            return;
-        }
-        let elapsed = now
-            .duration_since(st.cycle_start.get().unwrap_or(now))
-            .as_secs();
-        if elapsed >= 10 {
-            st.flatlined.set(true);
-            let _ = send_text(
-                conn,
-                self.ids.sender,
-                TextSeverity::Error,
-                elapsed as u32,
-                "No response from server for >= 10 seconds",
-            );
-        } else if elapsed >= 3 {
-            let _ = send_text(
-                conn,
-                self.ids.sender,
-                TextSeverity::Warning,
-                elapsed as u32,
-                "No response from server for >= 3 seconds",
-            );
-        }
-    }
-
-    fn ping(&self, conn: &Connection) {
-        let _ = conn.pack_message(
-            TimeVal::now(),
-            self.ids.ping,
-            self.ids.sender,
-            &[],
-            class::RELIABLE,
-        );
+    /// Starts the cycle (a remote's first `mainloop()`; later calls change nothing).
+    pub fn start(&self) {
+        self.state.started.set(true);
     }
 
     /// True while a ping waits for its pong.
     pub fn waiting_for_pong(&self) -> bool {
-        self.state.unanswered.get()
+        self.state.cycle.borrow().waiting_for_pong()
     }
 
     /// Time of the last pong received (the server's clock).
     pub fn last_pong(&self) -> Option<TimeVal> {
-        self.state.last_pong.get()
+        self.state.cycle.borrow().last_pong()
     }
 
-    /// Suppresses (or re-enables) the "no response" texts.
+    /// Suppresses (or re-enables) the "no response" texts; pings still go out.
     pub fn set_quiet(&self, quiet: bool) {
-        self.state.shutup.set(quiet);
+        self.state.cycle.borrow_mut().set_quiet(quiet);
     }
 }
 
@@ -273,8 +166,20 @@ impl RemoteCore {
     /// Opens the connection of `Device@location` (shared with other devices at that location)
     /// and returns the device part of the name with it.
     pub fn open(name: &str) -> Result<(String, Connection), Error> {
+        Self::open_in(None, name)
+    }
+
+    /// Like [`open`](Self::open), with a new client connection's sockets waiting in
+    /// `reactor` when one is given (a server loop reading other servers: one poll).
+    pub fn open_in(
+        reactor: Option<&crate::net::Reactor>,
+        name: &str,
+    ) -> Result<(String, Connection), Error> {
         let parsed = DeviceName::parse(name)?;
-        let conn = Connection::open_location(&parsed)?;
+        let conn = match reactor {
+            Some(r) => Connection::open_in(r, name)?,
+            None => Connection::open_location(&parsed)?,
+        };
         Ok((parsed.device, conn))
     }
 
@@ -311,11 +216,11 @@ impl RemoteCore {
         self.handlers.push(h);
     }
 
-    /// Services the connection (all devices on it) and this device's ping cycle.
+    /// Services the connection: every device on it. The first call also starts this
+    /// device's ping cycle (as in C++), which the connection keeps running from then on.
     pub fn mainloop(&self) -> Result<(), Error> {
-        self.conn.mainloop()?;
-        self.ping.poll(&self.conn);
-        Ok(())
+        self.ping.start();
+        self.conn.mainloop()
     }
 
     /// The connection this remote uses.
@@ -345,7 +250,7 @@ impl RemoteCore {
 
     /// Sends `payload` as `type_id` from this device, RELIABLE, stamped now.
     pub fn send(&self, type_id: TypeId, payload: &[u8]) -> Result<(), Error> {
-        self.send_at(TimeVal::now(), type_id, payload, class::RELIABLE)
+        self.send_at(self.conn.now().wall, type_id, payload, class::RELIABLE)
     }
 
     /// Sends `payload` as `type_id` from this device with an explicit time and class.

@@ -5,15 +5,15 @@
 use std::cell::{Cell, RefCell};
 use std::ops::Deref;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
-use super::ServerDevice;
+use super::{Cadence, ServerDevice};
 use crate::connection::{Connection, ConnectionEvent};
 use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
 use crate::error::Error;
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 use crate::wire::class;
 use crate::wire::payload::button as codec;
 
@@ -523,8 +523,7 @@ fn apply_admin(
 pub struct ButtonExample {
     server: ButtonServer,
     name: String,
-    period: Option<Duration>,
-    next: Instant,
+    cadence: Cadence,
 }
 
 impl ButtonExample {
@@ -538,8 +537,7 @@ impl ButtonExample {
         Ok(ButtonExample {
             server: ButtonServer::new(device, conn, buttons)?,
             name: device.to_string(),
-            period: (rate > 0.0 && rate.is_finite()).then(|| Duration::from_secs_f64(1.0 / rate)),
-            next: Instant::now(),
+            cadence: Cadence::per_second(rate),
         })
     }
 
@@ -548,9 +546,14 @@ impl ButtonExample {
         &self.server
     }
 
-    /// Flips every button and reports (one cycle of the example).
+    /// Flips every button and reports, stamped now (one cycle of the example).
     pub fn flip(&self) {
-        self.server.set_timestamp(TimeVal::now());
+        self.flip_at(self.server.connection().now().wall);
+    }
+
+    /// Flips every button and reports, stamped `time`.
+    pub fn flip_at(&self, time: TimeVal) {
+        self.server.set_timestamp(time);
         {
             let mut s = self.server.state.borrow_mut();
             for i in 0..s.num {
@@ -566,19 +569,13 @@ impl ServerDevice for ButtonExample {
         &self.name
     }
 
-    fn mainloop(&mut self, now: Instant) {
-        let Some(period) = self.period else { return };
-        if now < self.next {
-            return;
-        }
-        self.flip();
-        self.next += period;
-        if self.next <= now {
-            self.next = now + period;
+    fn mainloop(&mut self, now: Now) {
+        if self.cadence.due(now.mono) {
+            self.flip_at(now.wall);
         }
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.period.map(|_| self.next)
+        self.cadence.deadline()
     }
 }

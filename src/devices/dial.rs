@@ -4,15 +4,15 @@
 
 use std::ops::Deref;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
-use super::ServerDevice;
+use super::{Cadence, ServerDevice};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, TypeId};
 use crate::error::Error;
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 use crate::wire::class;
 use crate::wire::payload::dial as codec;
 
@@ -198,8 +198,7 @@ pub struct DialExample {
     server: DialServer,
     name: String,
     step: f64,
-    period: Option<Duration>,
-    next: Instant,
+    cadence: Cadence,
 }
 
 impl DialExample {
@@ -216,8 +215,7 @@ impl DialExample {
             server: DialServer::new(device, conn, dials)?,
             name: device.to_string(),
             step: if ok { spin_rate / update_rate } else { 0.0 },
-            period: ok.then(|| Duration::from_secs_f64(1.0 / update_rate)),
-            next: Instant::now(),
+            cadence: Cadence::per_second(update_rate),
         })
     }
 }
@@ -227,23 +225,18 @@ impl ServerDevice for DialExample {
         &self.name
     }
 
-    fn mainloop(&mut self, now: Instant) {
-        let Some(period) = self.period else { return };
-        if now < self.next {
+    fn mainloop(&mut self, now: Now) {
+        if !self.cadence.due(now.mono) {
             return;
         }
-        self.server.set_timestamp(TimeVal::now());
+        self.server.set_timestamp(now.wall);
         for i in 0..self.server.num_dials() {
             self.server.set_dial(i, self.step);
         }
         self.server.report_changes();
-        self.next += period;
-        if self.next <= now {
-            self.next = now + period;
-        }
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.period.map(|_| self.next)
+        self.cadence.deadline()
     }
 }

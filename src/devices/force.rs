@@ -389,7 +389,7 @@ impl ForceDeviceRemote {
 
     /// Sends a plane then its extra properties, both LOW_LATENCY (C++ `sendSurface`).
     pub fn send_surface(&self, plane: &Plane, extra: &Plane2) -> Result<(), Error> {
-        let now = TimeVal::now();
+        let now = self.connection().now().wall;
         let mut buf = [0u8; Plane::LEN];
         plane.encode(&mut buf);
         self.send_at(now, self.ids.plane(), &buf, class::LOW_LATENCY)?;
@@ -403,7 +403,7 @@ impl ForceDeviceRemote {
         let mut buf = [0u8; ForceField::LEN];
         field.encode(&mut buf);
         self.send_at(
-            TimeVal::now(),
+            self.connection().now().wall,
             self.ids.force_field(),
             &buf,
             class::LOW_LATENCY,
@@ -681,7 +681,7 @@ impl ForceDeviceServer {
         let mut buf = [0u8; codec::ForceError::LEN];
         codec::ForceError { code }.encode(&mut buf);
         self.conn.pack_message(
-            TimeVal::now(),
+            self.conn.now().wall,
             self.ids.error(),
             self.base.sender,
             &buf,

@@ -1,7 +1,9 @@
 //! Device types: each has a server half (reports) and a remote half (callbacks), built on the
 //! shared [`base`] behaviour.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+use crate::time::Now;
 
 pub mod analog;
 pub mod analog_output;
@@ -19,8 +21,62 @@ pub mod tracker;
 pub trait ServerDevice {
     /// The device's name (its sender).
     fn name(&self) -> &str;
-    /// Does the device's periodic work (read hardware, send reports).
-    fn mainloop(&mut self, now: Instant);
+    /// Does the device's periodic work (read hardware, send reports). `now` is the loop
+    /// pass's reading of the clock: devices stamp reports with `now.wall` and schedule with
+    /// `now.mono`, never reading a clock themselves.
+    fn mainloop(&mut self, now: Now);
     /// When the device next needs [`mainloop`](Self::mainloop), if it has a schedule.
     fn next_deadline(&self) -> Option<Instant>;
+}
+
+/// A fixed-rate schedule: due at the first pass, then every period. After a stall it restarts
+/// from the current time instead of bursting to catch up.
+#[derive(Clone, Copy, Debug)]
+pub struct Cadence {
+    period: Option<Duration>,
+    next: Option<Instant>,
+}
+
+impl Cadence {
+    /// `rate` times a second; never for a rate that is not positive and finite.
+    pub fn per_second(rate: f64) -> Cadence {
+        Cadence {
+            period: (rate > 0.0 && rate.is_finite()).then(|| Duration::from_secs_f64(1.0 / rate)),
+            next: None,
+        }
+    }
+
+    /// Every `period`; never for `None`.
+    pub fn every(period: Option<Duration>) -> Cadence {
+        Cadence { period, next: None }
+    }
+
+    /// Whether a tick is due at `now`; if so, schedules the next one.
+    pub fn due(&mut self, now: Instant) -> bool {
+        let Some(period) = self.period else {
+            return false;
+        };
+        match self.next {
+            Some(next) if now < next => false,
+            Some(next) => {
+                let after = next + period;
+                self.next = Some(if after <= now { now + period } else { after });
+                true
+            }
+            None => {
+                self.next = Some(now + period);
+                true
+            }
+        }
+    }
+
+    /// When the next tick is due (`None`: never, or not started — a first pass starts it).
+    pub fn deadline(&self) -> Option<Instant> {
+        self.period.and(self.next)
+    }
+
+    /// True before the first tick.
+    pub fn is_first(&self) -> bool {
+        self.next.is_none()
+    }
 }

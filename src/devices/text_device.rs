@@ -8,11 +8,11 @@ use std::time::{Duration, Instant};
 
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::{decode_text, encode_text, TextSeverity, MAX_TEXT, TEXT_PAYLOAD_LEN};
-use super::ServerDevice;
+use super::{Cadence, ServerDevice};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId};
 use crate::error::Error;
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 use crate::wire::class;
 
 /// A text message (C++ `vrpn_TEXTCB`). The text is kept in a fixed buffer (no allocation).
@@ -140,7 +140,7 @@ impl TextSender {
             return Err(Error::PayloadTooLarge(text.len() + 9));
         }
         self.conn.pack_message(
-            time.unwrap_or_else(TimeVal::now),
+            time.unwrap_or_else(|| self.conn.now().wall),
             self.base.text,
             self.base.sender,
             &buf,
@@ -160,8 +160,7 @@ pub struct TextExample {
     sender: TextSender,
     name: String,
     message: String,
-    period: Option<Duration>,
-    next: Instant,
+    cadence: Cadence,
 }
 
 impl TextExample {
@@ -179,8 +178,9 @@ impl TextExample {
             sender: TextSender::new(device, conn)?,
             name: device.to_string(),
             message: message.to_string(),
-            period: (period > 0.0 && period.is_finite()).then(|| Duration::from_secs_f64(period)),
-            next: Instant::now(),
+            cadence: Cadence::every(
+                (period > 0.0 && period.is_finite()).then(|| Duration::from_secs_f64(period)),
+            ),
         })
     }
 }
@@ -190,21 +190,15 @@ impl ServerDevice for TextExample {
         &self.name
     }
 
-    fn mainloop(&mut self, now: Instant) {
-        let Some(period) = self.period else { return };
-        if now < self.next {
-            return;
-        }
-        let _ = self
-            .sender
-            .send_message(&self.message, TextSeverity::Normal, 0, None);
-        self.next += period;
-        if self.next <= now {
-            self.next = now + period;
+    fn mainloop(&mut self, now: Now) {
+        if self.cadence.due(now.mono) {
+            let _ =
+                self.sender
+                    .send_message(&self.message, TextSeverity::Normal, 0, Some(now.wall));
         }
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.period.map(|_| self.next)
+        self.cadence.deadline()
     }
 }

@@ -17,7 +17,7 @@ use crate::devices::ServerDevice;
 use crate::dispatch::HandlerId;
 use crate::error::Error;
 use crate::server::config::{AnalogFly, FlyMode};
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 
 /// Everything the callbacks and the mainloop share.
 struct State {
@@ -32,13 +32,15 @@ struct State {
     timestamp: TimeVal,
     pos: [f64; 3],
     quat: [f64; 4],
-    /// A fixed "now" for tests; `None` reads the wall clock.
+    /// A fixed "now" for tests; `None` uses the time of the current pass.
     clock: Option<TimeVal>,
+    /// The wall-clock time of the current server loop pass.
+    pass: TimeVal,
 }
 
 impl State {
     fn now(&self) -> TimeVal {
-        self.clock.unwrap_or_else(TimeVal::now)
+        self.clock.unwrap_or(self.pass)
     }
 
     fn reset(&mut self) {
@@ -108,7 +110,9 @@ pub struct TrackerAnalogFly {
     update_interval: f64,
     report_changes: bool,
     /// When the wall clock last crossed an interval boundary (for the deadline).
-    prev_instant: Instant,
+    prev_instant: Option<Instant>,
+    /// The monotonic time of the current pass.
+    pass_instant: Option<Instant>,
     first_connection: HandlerId,
 }
 
@@ -116,7 +120,7 @@ impl TrackerAnalogFly {
     /// Builds the device `cfg` describes, reporting on `conn` (the server connection).
     pub fn new(cfg: &AnalogFly, conn: &Connection) -> Result<TrackerAnalogFly, Error> {
         let tracker = TrackerServer::new(&cfg.name, conn, 1)?;
-        let now = TimeVal::now();
+        let now = conn.now().wall;
         let absolute = cfg.mode == FlyMode::Absolute;
         let state = Rc::new(RefCell::new(State {
             absolute,
@@ -131,6 +135,7 @@ impl TrackerAnalogFly {
             pos: [0.0; 3],
             quat: [0.0, 0.0, 0.0, 1.0],
             clock: None,
+            pass: now,
         }));
 
         let mut axes = Vec::new();
@@ -190,7 +195,6 @@ impl TrackerAnalogFly {
 
         let s = state.clone();
         let first_connection = conn.on_event(ConnectionEvent::GotFirstConnection, move || {
-            println!("Get a new connection, reset virtual_Tracker");
             s.borrow_mut().reset();
         });
         state.borrow_mut().reset();
@@ -209,7 +213,8 @@ impl TrackerAnalogFly {
             clutch_button,
             update_interval: update_interval(cfg.update_rate),
             report_changes: false,
-            prev_instant: Instant::now(),
+            prev_instant: None,
+            pass_instant: None,
             first_connection,
         })
     }
@@ -246,6 +251,23 @@ impl TrackerAnalogFly {
         &self.tracker
     }
 
+    /// Deadlines of the sources read from other servers (their connections' own schedules).
+    fn source_deadlines(&self) -> impl Iterator<Item = Instant> + '_ {
+        self.axes
+            .iter()
+            .filter_map(AnalogSource::next_deadline)
+            .chain(
+                self.reset_button
+                    .iter()
+                    .filter_map(ButtonSource::next_deadline),
+            )
+            .chain(
+                self.clutch_button
+                    .iter()
+                    .filter_map(ButtonSource::next_deadline),
+            )
+    }
+
     /// One mainloop pass at the device's clock (LAYERED.md §2.5).
     pub fn poll(&mut self) {
         for a in &self.axes {
@@ -272,7 +294,7 @@ impl TrackerAnalogFly {
             }
             if due {
                 st.prevtime = now;
-                self.prev_instant = Instant::now();
+                self.prev_instant = self.pass_instant;
             }
             report.then_some((st.timestamp, st.pos, st.quat))
         };
@@ -293,11 +315,19 @@ impl ServerDevice for TrackerAnalogFly {
         &self.name
     }
 
-    fn mainloop(&mut self, _now: Instant) {
+    fn mainloop(&mut self, now: Now) {
+        self.state.borrow_mut().pass = now.wall;
+        self.pass_instant = Some(now.mono);
+        if self.prev_instant.is_none() {
+            self.prev_instant = Some(now.mono);
+        }
         self.poll();
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        Some(self.prev_instant + Duration::from_secs_f64(self.update_interval))
+        let own = self
+            .prev_instant
+            .map(|p| p + Duration::from_secs_f64(self.update_interval));
+        own.into_iter().chain(self.source_deadlines()).min()
     }
 }

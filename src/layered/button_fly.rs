@@ -15,7 +15,7 @@ use crate::devices::ServerDevice;
 use crate::dispatch::HandlerId;
 use crate::error::Error;
 use crate::server::config::{ButtonFly, FlyMode, ScaleAnalog};
-use crate::time::TimeVal;
+use crate::time::{Now, TimeVal};
 
 struct AxisState {
     absolute: bool,
@@ -34,11 +34,13 @@ struct State {
     pos: [f64; 3],
     quat: [f64; 4],
     clock: Option<TimeVal>,
+    /// The wall-clock time of the current server loop pass.
+    pass: TimeVal,
 }
 
 impl State {
     fn now(&self) -> TimeVal {
-        self.clock.unwrap_or_else(TimeVal::now)
+        self.clock.unwrap_or(self.pass)
     }
 
     fn reset(&mut self) {
@@ -87,7 +89,9 @@ pub struct TrackerButtonFly {
     rot_source: Option<AnalogSource>,
     update_interval: f64,
     report_changes: bool,
-    prev_instant: Instant,
+    prev_instant: Option<Instant>,
+    /// The monotonic time of the current pass.
+    pass_instant: Option<Instant>,
     first_connection: HandlerId,
 }
 
@@ -125,7 +129,7 @@ impl TrackerButtonFly {
     /// Builds the device `cfg` describes, reporting on `conn` (the server connection).
     pub fn new(cfg: &ButtonFly, conn: &Connection) -> Result<TrackerButtonFly, Error> {
         let tracker = TrackerServer::new(&cfg.name, conn, 1)?;
-        let now = TimeVal::now();
+        let now = conn.now().wall;
         let state = Rc::new(RefCell::new(State {
             axes: cfg
                 .axes
@@ -145,6 +149,7 @@ impl TrackerButtonFly {
             pos: [0.0; 3],
             quat: [0.0, 0.0, 0.0, 1.0],
             clock: None,
+            pass: now,
         }));
         let mut buttons = Vec::with_capacity(cfg.axes.len());
         for (i, a) in cfg.axes.iter().enumerate() {
@@ -180,7 +185,6 @@ impl TrackerButtonFly {
         let rot_source = scale_source(&cfg.rot_scale, conn, &state, true)?;
         let s = state.clone();
         let first_connection = conn.on_event(ConnectionEvent::GotFirstConnection, move || {
-            println!("Get a new connection, reset virtual_Tracker");
             s.borrow_mut().reset();
         });
         state.borrow_mut().reset();
@@ -194,7 +198,8 @@ impl TrackerButtonFly {
             rot_source,
             update_interval: update_interval(cfg.update_rate),
             report_changes: false,
-            prev_instant: Instant::now(),
+            prev_instant: None,
+            pass_instant: None,
             first_connection,
         })
     }
@@ -231,6 +236,23 @@ impl TrackerButtonFly {
         &self.tracker
     }
 
+    /// Deadlines of the sources read from other servers (their connections' own schedules).
+    fn source_deadlines(&self) -> impl Iterator<Item = Instant> + '_ {
+        self.buttons
+            .iter()
+            .filter_map(ButtonSource::next_deadline)
+            .chain(
+                self.vel_source
+                    .iter()
+                    .filter_map(AnalogSource::next_deadline),
+            )
+            .chain(
+                self.rot_source
+                    .iter()
+                    .filter_map(AnalogSource::next_deadline),
+            )
+    }
+
     /// One mainloop pass at the device's clock (LAYERED.md §3.4).
     pub fn poll(&mut self) {
         for b in &self.buttons {
@@ -258,7 +280,7 @@ impl TrackerButtonFly {
             if report || due {
                 st.update(dt);
                 st.prevtime = now;
-                self.prev_instant = Instant::now();
+                self.prev_instant = self.pass_instant;
             }
             if report {
                 st.timestamp = now;
@@ -282,7 +304,12 @@ impl ServerDevice for TrackerButtonFly {
         &self.name
     }
 
-    fn mainloop(&mut self, _now: Instant) {
+    fn mainloop(&mut self, now: Now) {
+        self.state.borrow_mut().pass = now.wall;
+        self.pass_instant = Some(now.mono);
+        if self.prev_instant.is_none() {
+            self.prev_instant = Some(now.mono);
+        }
         self.poll();
     }
 
@@ -295,8 +322,11 @@ impl ServerDevice for TrackerButtonFly {
             .iter()
             .any(|a| a.absolute && a.active)
         {
-            return Some(Instant::now());
+            return self.pass_instant;
         }
-        Some(self.prev_instant + Duration::from_secs_f64(self.update_interval))
+        let own = self
+            .prev_instant
+            .map(|p| p + Duration::from_secs_f64(self.update_interval));
+        own.into_iter().chain(self.source_deadlines()).min()
     }
 }

@@ -12,6 +12,7 @@
 
 use crate::connection::Connection;
 use crate::devices::analog::AnalogRemote;
+use crate::devices::base::RemoteCore;
 use crate::devices::button::ButtonRemote;
 use crate::error::Error;
 use crate::server::config::DeviceRef;
@@ -187,19 +188,29 @@ impl AnalogSource {
                 local: true,
             },
             DeviceRef::Remote(n) => AnalogSource {
-                remote: AnalogRemote::new(n)?,
+                remote: {
+                    let (device, conn) = RemoteCore::open_in(server.reactor().as_ref(), n)?;
+                    AnalogRemote::on_connection(&device, &conn)?
+                },
                 local: false,
             },
         })
     }
 
-    /// Runs the remote's ping cycle, and services its connection unless that is the server's
-    /// own (which the server loop services; local messages arrive as they are packed).
+    /// Services the source's connection unless that is the server's own (which the server
+    /// loop services, liveness pings included; local messages arrive as they are packed).
     pub(crate) fn poll(&self) {
-        if self.local {
-            self.remote.ping_cycle().poll(self.remote.connection());
-        } else {
+        if !self.local {
             let _ = self.remote.mainloop();
+        }
+    }
+
+    /// When the source's own connection next needs a pass (remote sources only).
+    pub(crate) fn next_deadline(&self) -> Option<std::time::Instant> {
+        if self.local {
+            None
+        } else {
+            self.remote.connection().poll_timeout()
         }
     }
 }
@@ -212,7 +223,10 @@ impl ButtonSource {
                 local: true,
             },
             DeviceRef::Remote(n) => ButtonSource {
-                remote: ButtonRemote::new(n)?,
+                remote: {
+                    let (device, conn) = RemoteCore::open_in(server.reactor().as_ref(), n)?;
+                    ButtonRemote::on_connection(&device, &conn)?
+                },
                 local: false,
             },
         })
@@ -220,10 +234,17 @@ impl ButtonSource {
 
     /// See [`AnalogSource::poll`].
     pub(crate) fn poll(&self) {
-        if self.local {
-            self.remote.ping_cycle().poll(self.remote.connection());
-        } else {
+        if !self.local {
             let _ = self.remote.mainloop();
+        }
+    }
+
+    /// See [`AnalogSource::next_deadline`].
+    pub(crate) fn next_deadline(&self) -> Option<std::time::Instant> {
+        if self.local {
+            None
+        } else {
+            self.remote.connection().poll_timeout()
         }
     }
 }

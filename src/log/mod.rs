@@ -36,3 +36,24 @@ pub use format::{
 pub use names::{NameEvent, NameTable};
 pub use reader::{check_log_cookie, CookieProblem, Entries, LogError, LogReader};
 pub use writer::{log_cookie_from_peer, LogWriter, DEFAULT_BUFFER_LEN, MIN_BUFFER_LEN};
+
+/// Creates a new log file at `path` (never overwriting one) with this crate's cookie, as the
+/// byte sink a connection's session writes to.
+pub(crate) fn open_sink(path: &str) -> Result<LogWriter<Box<dyn std::io::Write>>, LogError> {
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .map_err(|error| LogError::Io {
+            path: path.into(),
+            offset: 0,
+            error,
+        })?;
+    let cookie = crate::wire::Cookie::ours(0).to_bytes();
+    Ok(LogWriter::new(
+        Box::new(file) as Box<dyn std::io::Write>,
+        path,
+        &cookie,
+        DEFAULT_BUFFER_LEN,
+    ))
+}

@@ -1,5 +1,9 @@
-//! The server loop: devices, then the connection, then a wait that sleeps only when nothing is
-//! due (CONFIG.md §1 main loop, with an event-driven wait instead of a fixed sleep).
+//! The server loop: devices, then the connection, then one wait for everything.
+//!
+//! Every socket (the server's, and those of connections its layered devices open to other
+//! servers) and every serial port waits in the one [`Reactor`] of the server connection, so
+//! the loop sleeps in exactly one poll until a byte arrives or the earliest deadline of any
+//! device, connection or liveness ping is due.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -8,15 +12,17 @@ use super::options::SleepPolicy;
 use crate::connection::{Connection, ConnectionEvent};
 use crate::devices::ServerDevice;
 use crate::error::Error;
+use crate::net::Reactor;
 
 /// A server connection and the devices it serves.
 pub struct ServerLoop {
     conn: Connection,
+    reactor: Option<Reactor>,
     devices: Vec<Box<dyn ServerDevice>>,
     sleep: SleepPolicy,
     quit_after_last: bool,
     last_left: std::rc::Rc<std::cell::Cell<bool>>,
-    last_activity: Instant,
+    last_activity: Option<Instant>,
     flush_logs: bool,
 }
 
@@ -27,12 +33,13 @@ impl ServerLoop {
         let l = last_left.clone();
         conn.on_event(ConnectionEvent::DroppedLastConnection, move || l.set(true));
         ServerLoop {
+            reactor: conn.reactor(),
             conn,
             devices,
             sleep,
             quit_after_last: false,
             last_left,
-            last_activity: Instant::now(),
+            last_activity: None,
             flush_logs: false,
         }
     }
@@ -55,7 +62,7 @@ impl ServerLoop {
     /// One pass: every device in order, then the connection. Returns false when the loop
     /// should end (`-q` and the last client left).
     pub fn pass(&mut self) -> Result<bool, Error> {
-        let now = Instant::now();
+        let now = crate::net::clock();
         for d in &mut self.devices {
             d.mainloop(now);
         }
@@ -66,8 +73,17 @@ impl ServerLoop {
         Ok(!(self.quit_after_last && self.last_left.get()))
     }
 
+    /// The earliest deadline of any device or of the connection.
+    pub fn next_deadline(&self) -> Option<Instant> {
+        self.devices
+            .iter()
+            .filter_map(|d| d.next_deadline())
+            .chain(self.conn.poll_timeout())
+            .min()
+    }
+
     /// Waits as the policy says: not at all while spinning or shortly after traffic;
-    /// otherwise until a socket is ready or the earliest device deadline.
+    /// otherwise until a socket or port is ready or the earliest deadline.
     pub fn wait(&mut self) -> Result<(), Error> {
         let SleepPolicy::EventDriven {
             busy_window,
@@ -76,18 +92,28 @@ impl ServerLoop {
         else {
             return Ok(());
         };
+        let Some(reactor) = self.reactor.clone() else {
+            return Ok(());
+        };
         let now = Instant::now();
-        if self.conn.take_activity() {
-            self.last_activity = now;
+        if reactor.take_activity() {
+            self.last_activity = Some(now);
         }
-        if now.duration_since(self.last_activity) < busy_window {
+        if self
+            .last_activity
+            .is_some_and(|t| now.duration_since(t) < busy_window)
+        {
             // Keep polling without blocking: answers go out at spinning-server latency.
-            self.conn.wait(Duration::ZERO)?;
+            reactor
+                .poll_now()
+                .map_err(|e| Error::io("polling sockets", e))?;
             return Ok(());
         }
-        let deadline = self.devices.iter().filter_map(|d| d.next_deadline()).min();
-        if self.conn.wait_until(deadline, max_block)? {
-            self.last_activity = Instant::now();
+        let woke = reactor
+            .wait(self.next_deadline(), max_block)
+            .map_err(|e| Error::io("polling sockets", e))?;
+        if woke {
+            self.last_activity = Some(Instant::now());
         }
         Ok(())
     }
@@ -103,3 +129,6 @@ impl ServerLoop {
         Ok(())
     }
 }
+
+/// How long [`ServerLoop::wait`] keeps polling without sleeping after traffic, by default.
+pub const DEFAULT_BUSY_WINDOW: Duration = Duration::from_millis(2);

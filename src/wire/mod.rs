@@ -19,6 +19,8 @@ pub use header::{padded_len, Header, HEADER_LEN};
 pub const ALIGN: usize = 8;
 /// Largest message a C++ peer can send on TCP, header and padding included.
 pub const MAX_TCP_MESSAGE: usize = 64_000;
+/// Largest payload a VRPN peer can receive over TCP (its 64000-byte buffer less the header).
+pub const MAX_PAYLOAD: usize = MAX_TCP_MESSAGE - HEADER_LEN;
 /// Largest padded payload a C++ receiver accepts on TCP (`d_tcpAlignedInbuf`).
 pub const MAX_TCP_PADDED_PAYLOAD: usize = 64_008;
 /// Largest UDP datagram a C++ peer sends (Ethernet MTU less IP and UDP headers).

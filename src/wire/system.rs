@@ -19,24 +19,26 @@ pub const LOWEST_SYSTEM_TYPE: i32 = -1999;
 
 /// Length of a description payload for `name`: u32 length, the name, its NUL.
 #[inline]
-pub fn description_len(name: &str) -> usize {
-    4 + name.len() + 1
+pub fn description_len(name: impl AsRef<[u8]>) -> usize {
+    4 + name.as_ref().len() + 1
 }
 
 /// Writes a sender or type description payload. `out` must hold [`description_len`] bytes.
-pub fn encode_description(out: &mut [u8], name: &str) -> usize {
+pub fn encode_description(out: &mut [u8], name: impl AsRef<[u8]>) -> usize {
+    let name = name.as_ref();
     let n = name.len();
     BigEndian::write_u32(&mut out[0..4], (n + 1) as u32);
-    out[4..4 + n].copy_from_slice(name.as_bytes());
+    out[4..4 + n].copy_from_slice(name);
     out[4 + n] = 0;
     4 + n + 1
 }
 
-/// Reads the name in a sender or type description payload.
+/// Reads the name in a sender or type description payload, as the bytes the peer sent.
 ///
-/// Like C++, the name ends at its NUL; a payload longer than 100 bytes (`vrpn_CNAME_LENGTH`) is
-/// refused, and so is a name that is not UTF-8 (names are ASCII in practice).
-pub fn decode_description(payload: &[u8]) -> Result<&str> {
+/// Like C++, the name ends at its NUL and a payload longer than 100 bytes
+/// (`vrpn_CNAME_LENGTH`) is refused. Any other byte is allowed: names are ASCII in practice,
+/// but a peer (or a C++ server echoing what some client described) may send any byte.
+pub fn decode_description_bytes(payload: &[u8]) -> Result<&[u8]> {
     need(payload, 5)?;
     if payload.len() > MAX_NAME_LEN + 5 {
         return Err(WireError::NameTooLong(payload.len() - 5));
@@ -45,7 +47,12 @@ pub fn decode_description(payload: &[u8]) -> Result<&str> {
     if declared == 0 || declared > payload.len() - 4 + 1 {
         return Err(WireError::BadValue("description length"));
     }
-    let name = c_str(&payload[4..])?;
+    c_str(&payload[4..])
+}
+
+/// [`decode_description_bytes`] for a name that must be UTF-8 (log tools showing names).
+pub fn decode_description(payload: &[u8]) -> Result<&str> {
+    let name = decode_description_bytes(payload)?;
     std::str::from_utf8(name).map_err(|_| WireError::BadValue("name encoding"))
 }
 

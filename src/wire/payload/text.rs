@@ -40,6 +40,54 @@ pub fn severity_name(severity: u32) -> Option<&'static str> {
     }
 }
 
+/// Length of every text payload C++ sends: two u32 and the 1024-byte text buffer.
+pub const TEXT_PAYLOAD_LEN: usize = 8 + TEXT_CAPACITY;
+
+/// Severity of a text message, as a type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum TextSeverity {
+    /// `vrpn_TEXT_NORMAL` (0).
+    Normal,
+    /// `vrpn_TEXT_WARNING` (1).
+    Warning,
+    /// `vrpn_TEXT_ERROR` (2).
+    Error,
+    /// Any other value a peer sent.
+    Other(u32),
+}
+
+impl TextSeverity {
+    /// The wire value.
+    pub fn code(self) -> u32 {
+        match self {
+            TextSeverity::Normal => NORMAL,
+            TextSeverity::Warning => WARNING,
+            TextSeverity::Error => ERROR,
+            TextSeverity::Other(c) => c,
+        }
+    }
+
+    /// From the wire value.
+    pub fn from_code(c: u32) -> TextSeverity {
+        match c {
+            NORMAL => TextSeverity::Normal,
+            WARNING => TextSeverity::Warning,
+            ERROR => TextSeverity::Error,
+            c => TextSeverity::Other(c),
+        }
+    }
+
+    /// The heading C++ prints for it.
+    pub fn heading(self) -> &'static str {
+        match self {
+            TextSeverity::Normal => "VRPN Message",
+            TextSeverity::Warning => "VRPN Warning",
+            TextSeverity::Error => "VRPN Error",
+            TextSeverity::Other(_) => "VRPN UNKNOWN SEVERITY",
+        }
+    }
+}
+
 /// A decoded `vrpn_Base text_message`, borrowing its text from the payload.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TextMessage<'a> {

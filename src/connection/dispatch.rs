@@ -6,9 +6,11 @@
 //! nothing) and called with the list released. A callback that is already running is skipped
 //! rather than re-entered, which is what makes a double borrow impossible at run time.
 
-use std::cell::{Cell, RefCell};
+use std::cell::RefCell;
 use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::Connection;
 use crate::time::TimeVal;
 
 /// Local id of a sender name on a connection.
@@ -24,7 +26,8 @@ impl SenderId {
     pub const UNKNOWN: SenderId = SenderId(-1);
 }
 
-/// One message as handlers see it: local ids, the sender's timestamp, the payload.
+/// One message as handlers see it: local ids, the sender's timestamp, the payload, and the
+/// connection it arrived on (so a handler can answer without keeping the connection alive).
 #[derive(Clone, Copy, Debug)]
 pub struct Message<'a> {
     /// The sender's timestamp (never adjusted, as in VRPN 07).
@@ -35,25 +38,45 @@ pub struct Message<'a> {
     pub type_id: TypeId,
     /// The payload, without padding.
     pub payload: &'a [u8],
+    pub(crate) conn: &'a Connection,
+}
+
+impl<'a> Message<'a> {
+    /// The connection the message arrived on. Reply through it from inside a handler: a
+    /// handler that captured a `Connection` clone would keep the connection (and its port)
+    /// alive for as long as the handler is registered on it.
+    pub fn connection(&self) -> &'a Connection {
+        self.conn
+    }
 }
 
 /// Identifies a registered handler or callback so it can be removed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+///
+/// Ids are unique in the whole process, whichever list they came from (connection handlers,
+/// notice and state callbacks, a remote's `on_pose`, …), so an id can never remove another
+/// list's callback by accident.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct HandlerId(u64);
+
+impl HandlerId {
+    /// A new id, never handed out before in this process.
+    pub(crate) fn fresh() -> HandlerId {
+        static NEXT: AtomicU64 = AtomicU64::new(1);
+        HandlerId(NEXT.fetch_add(1, Ordering::Relaxed))
+    }
+}
 
 type Callback<T> = Rc<RefCell<dyn FnMut(&T)>>;
 
 /// A list of callbacks over values of type `T`, safe to modify and re-enter from a callback.
 pub struct CallbackList<T: ?Sized> {
     entries: RefCell<Vec<(HandlerId, Callback<T>)>>,
-    next_id: Cell<u64>,
 }
 
 impl<T: ?Sized> Default for CallbackList<T> {
     fn default() -> Self {
         CallbackList {
             entries: RefCell::new(Vec::new()),
-            next_id: Cell::new(1),
         }
     }
 }
@@ -61,8 +84,7 @@ impl<T: ?Sized> Default for CallbackList<T> {
 impl<T: ?Sized> CallbackList<T> {
     /// Adds a callback; callbacks run in registration order.
     pub fn add(&self, f: impl FnMut(&T) + 'static) -> HandlerId {
-        let id = HandlerId(self.next_id.get());
-        self.next_id.set(id.0 + 1);
+        let id = HandlerId::fresh();
         self.entries
             .borrow_mut()
             .push((id, Rc::new(RefCell::new(f))));
@@ -125,7 +147,6 @@ struct HandlerEntry {
 pub(crate) struct HandlerTable {
     by_type: RefCell<Vec<Vec<HandlerEntry>>>,
     any_type: RefCell<Vec<HandlerEntry>>,
-    next_id: Cell<u64>,
 }
 
 impl HandlerTable {
@@ -135,8 +156,7 @@ impl HandlerTable {
         sender: SenderFilter,
         f: impl FnMut(&Message<'_>) + 'static,
     ) -> HandlerId {
-        let id = HandlerId(self.next_id.get() + 1);
-        self.next_id.set(id.0);
+        let id = HandlerId::fresh();
         let entry = HandlerEntry {
             id,
             sender,
@@ -229,6 +249,7 @@ impl HandlerTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::cell::Cell;
 
     #[test]
     fn callbacks_may_register_callbacks_and_reenter() {
@@ -260,11 +281,13 @@ mod tests {
         );
         let h = hits.clone();
         let any = t.add(None, SenderFilter::Any, move |_| h.set(h.get() + 100));
+        let conn = Connection::new_loopback();
         let msg = |s| Message {
             time: TimeVal::ZERO,
             sender: SenderId(s),
             type_id: TypeId(3),
             payload: &[],
+            conn: &conn,
         };
         t.dispatch(&msg(1));
         t.dispatch(&msg(2));

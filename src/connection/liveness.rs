@@ -1,0 +1,141 @@
+//! The liveness cycles of the remotes on a connection (ping, pong, "no response" texts), run
+//! from the connection's own loop so that one `mainloop()` serves every remote on it and a
+//! server loop knows when the next ping is due.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Instant;
+
+use super::dispatch::{SenderId, TypeId};
+use super::{Connection, ConnectionEvent, ConnectionState, Notice, Severity};
+use crate::proto::ping::{PingAction, PingCycle, BACK_TEXT, ERROR_TEXT, WARN_TEXT};
+use crate::time::Now;
+use crate::wire::class;
+use crate::wire::payload::text::TextSeverity;
+
+/// One remote's liveness state, shared by the remote (which owns it) and its connection (which
+/// runs it while the remote exists).
+#[derive(Debug)]
+pub(crate) struct Liveness {
+    /// The device name (the remote's sender).
+    pub(crate) device: String,
+    pub(crate) sender: SenderId,
+    pub(crate) ping: TypeId,
+    pub(crate) cycle: RefCell<PingCycle>,
+    /// The remote's own `mainloop()` ran once: as in C++, a remote pings only from then on.
+    pub(crate) started: std::cell::Cell<bool>,
+}
+
+impl Liveness {
+    /// A pong from the device arrived: ends the cycle, and a flatline with a text.
+    pub(crate) fn pong(&self, conn: &Connection, time: crate::time::TimeVal) {
+        let back = self.cycle.borrow_mut().on_pong(time);
+        if back {
+            let _ = conn.send_text(self.sender, TextSeverity::Error, 0, BACK_TEXT);
+        }
+    }
+}
+
+impl Connection {
+    /// Runs `l` from this connection's loop while `l` exists.
+    pub(crate) fn watch_liveness(&self, l: &Rc<Liveness>) {
+        self.inner.liveness.borrow_mut().push(Rc::downgrade(l));
+    }
+
+    /// The cycles still alive (dead ones are forgotten on the way).
+    fn live_cycles(&self) -> impl Iterator<Item = Rc<Liveness>> + '_ {
+        let mut list = self.inner.liveness.borrow_mut();
+        list.retain(|w| w.strong_count() > 0);
+        // Upgrading a weak `Rc` allocates nothing; the list is short (one entry per remote).
+        let len = list.len();
+        drop(list);
+        (0..len).filter_map(move |i| {
+            self.inner
+                .liveness
+                .borrow()
+                .get(i)
+                .and_then(|w| w.upgrade())
+        })
+    }
+
+    pub(super) fn run_liveness(&self, now: Now) {
+        if self.inner.liveness.borrow().is_empty() || self.is_replay() {
+            return; // nobody answers pings in a log
+        }
+        let connected = self.state() == ConnectionState::Connected;
+        for l in self.live_cycles() {
+            if !l.started.get() {
+                continue;
+            }
+            let action = l.cycle.borrow_mut().poll(now.mono, connected);
+            let text = match action {
+                PingAction::Idle => continue,
+                PingAction::Ping => None,
+                PingAction::PingAndWarn(s) => Some((TextSeverity::Warning, s, WARN_TEXT)),
+                PingAction::PingAndError(s) => Some((TextSeverity::Error, s, ERROR_TEXT)),
+            };
+            let _ = self.pack_message(now.wall, l.ping, l.sender, &[], class::RELIABLE);
+            if let Some((severity, level, text)) = text {
+                let _ = self.send_text(l.sender, severity, level, text);
+            }
+        }
+    }
+
+    pub(super) fn liveness_event(&self, now: Now, ev: ConnectionEvent) {
+        if self.inner.liveness.borrow().is_empty() {
+            return;
+        }
+        for l in self.live_cycles() {
+            let mut c = l.cycle.borrow_mut();
+            match ev {
+                ConnectionEvent::GotConnection => c.on_connected(now.mono),
+                ConnectionEvent::DroppedConnection => c.on_dropped(now.mono),
+                _ => {}
+            }
+        }
+    }
+
+    pub(super) fn liveness_deadline(&self) -> Option<Instant> {
+        let list = self.inner.liveness.borrow();
+        list.iter()
+            .filter_map(|w| w.upgrade())
+            .filter(|l| l.started.get())
+            .filter_map(|l| l.cycle.borrow().next_deadline())
+            .min()
+    }
+
+    /// A server finished describing its devices: say so at once if a remote asks for a device
+    /// the server does not offer (a typo in the name would otherwise mean silence).
+    pub(super) fn check_wanted_devices(&self) {
+        if !self.inner.core.borrow().session.is_client() {
+            return;
+        }
+        let offered = self.peer_senders();
+        let peer = self
+            .peers()
+            .first()
+            .map_or_else(|| "the server".to_string(), |p| p.0.clone());
+        let missing: Vec<String> = self
+            .live_cycles()
+            .map(|l| l.device.clone())
+            .filter(|d| !offered.iter().any(|o| o == d))
+            .collect();
+        for device in missing {
+            let list = offered
+                .iter()
+                .filter(|o| o.as_str() != crate::connection::names::CONTROL_SENDER)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ");
+            let text = if list.is_empty() {
+                format!("the server at {peer} offers no devices; none is named {device:?}")
+            } else {
+                format!("the server at {peer} offers {list}; none is named {device:?}")
+            };
+            self.dispatch_notice(Notice {
+                severity: Severity::Warning,
+                text,
+            });
+        }
+    }
+}

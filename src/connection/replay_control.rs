@@ -1,0 +1,131 @@
+//! Controls of a log replay (C++ `vrpn_File_Connection`): rate, reset, play-to, jump-to.
+
+use super::{Connection, Core};
+use crate::log::replay::Replay;
+use crate::proto::Delivery;
+use crate::time::TimeVal;
+
+/// Controls of a log replay, borrowed from its connection.
+pub struct ReplayControl<'a> {
+    pub(super) conn: &'a Connection,
+}
+
+impl Connection {
+    /// Replay controls, when this connection replays a log file.
+    pub fn replay(&self) -> Option<ReplayControl<'_>> {
+        self.is_replay().then_some(ReplayControl { conn: self })
+    }
+
+    /// True when this connection replays a log file.
+    pub fn is_replay(&self) -> bool {
+        self.inner.core.borrow_mut().session.replay_mut().is_some()
+    }
+
+    fn with_replay<T>(&self, f: impl FnOnce(&mut Replay) -> T) -> T {
+        let mut core = self.inner.core.borrow_mut();
+        let Core { session, .. } = &mut *core;
+        f(session.replay_mut().expect("a replay connection"))
+    }
+
+    /// Delivers what the replay has due now (controls called from anywhere, handlers
+    /// included: nesting is counted, so a control inside a handler is safe).
+    fn play_due(&self) {
+        let now = self.now();
+        let outer = self.inner.pass_now.get().is_none();
+        if outer {
+            self.inner.pass_now.set(Some(now));
+        }
+        self.pump(now);
+        if outer {
+            self.inner.pass_now.set(None);
+        }
+    }
+
+    /// Consumes due replay entries without delivering user messages (jump).
+    fn skip_due(&self) {
+        let now = self.now();
+        loop {
+            let d = self.inner.core.borrow_mut().session.poll_delivery(now);
+            match d {
+                None => break,
+                Some(Delivery::Message { .. }) => {}
+                Some(Delivery::Notice(n)) => self.dispatch_notice(n),
+                Some(_) => {}
+            }
+        }
+    }
+}
+
+impl ReplayControl<'_> {
+    /// Sets the speed: 1.0 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as
+    /// fast as possible.
+    pub fn set_rate(&self, rate: f64) {
+        self.conn.with_replay(|r| r.set_rate(rate));
+    }
+
+    /// The speed factor.
+    pub fn rate(&self) -> f64 {
+        self.conn.with_replay(|r| r.rate())
+    }
+
+    /// Back to the start (handlers see a dropped-connection event, as in C++).
+    pub fn reset(&self) {
+        self.conn.with_replay(|r| r.reset());
+        self.conn.play_due();
+    }
+
+    /// Plays, now, every message up to `secs` after the first one (rewinding first when that
+    /// is behind the current position).
+    pub fn play_to_time(&self, secs: f64) {
+        self.conn.with_replay(|r| r.play_to_time(secs));
+        self.conn.play_due();
+    }
+
+    /// Plays the next message now, whatever its time. Returns false at the end of the file.
+    pub fn play_one(&self) -> bool {
+        if self.eof() {
+            return false;
+        }
+        self.conn.with_replay(|r| r.play_one());
+        self.conn.play_due();
+        true
+    }
+
+    /// Moves to `secs` after the first message without delivering the messages in between
+    /// (descriptions on the way are still learned). Returns whether that time is in the log.
+    pub fn jump_to_time(&self, secs: f64) -> bool {
+        let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
+        self.conn.skip_due();
+        inside
+    }
+
+    /// True when every message has been played.
+    pub fn eof(&self) -> bool {
+        self.conn.with_replay(|r| r.eof())
+    }
+
+    /// Where the replay stands, on the log's own clock.
+    pub fn file_time(&self) -> TimeVal {
+        self.conn.with_replay(|r| r.file_time())
+    }
+
+    /// Seconds since the first message.
+    pub fn elapsed(&self) -> f64 {
+        self.conn.with_replay(|r| r.elapsed())
+    }
+
+    /// Time of the first user message.
+    pub fn first_time(&self) -> Option<TimeVal> {
+        self.conn.with_replay(|r| r.first_time())
+    }
+
+    /// Time of the last user message.
+    pub fn last_time(&self) -> Option<TimeVal> {
+        self.conn.with_replay(|r| r.last_time())
+    }
+
+    /// Seconds between the first and last user messages.
+    pub fn length_secs(&self) -> f64 {
+        self.conn.with_replay(|r| r.length_secs())
+    }
+}

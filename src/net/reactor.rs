@@ -1,0 +1,285 @@
+//! One poll for a whole process loop: sockets, serial ports and a precise timer wait in it.
+//!
+//! A [`Reactor`] is a cheap handle (clones share it). Every socket of every connection made
+//! on it, and every serial port a server runs, registers here and gets a token; a poll records
+//! readiness per token, and each owner takes its own readiness when it next runs. So a
+//! `vrpn_server` sleeps in exactly one `epoll_wait` until a client's bytes, a device's bytes,
+//! or the earliest deadline of anything in the process.
+//!
+//! Readiness is edge-triggered (mio registers sockets that way): an owner keeps reading until
+//! `WouldBlock` (or a short read, which proves a stream empty) before it waits again.
+
+use std::cell::RefCell;
+use std::io;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use mio::event::Source;
+use mio::{Events, Interest, Poll, Token};
+
+use crate::time::Now;
+
+/// Token of the timer that wakes the poll at a deadline.
+const TIMER: Token = Token(0);
+
+/// What a poll saw for one token since its owner last looked.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Ready {
+    /// Data (or a connection, or an error) can be read.
+    pub readable: bool,
+    /// Room to write (or a connect completed).
+    pub writable: bool,
+    /// The peer closed its side, or the socket failed: read to the end.
+    pub read_closed: bool,
+    /// The socket reported an error.
+    pub error: bool,
+    /// When the poll woke with the first of these events: the arrival time of the first
+    /// byte waiting on a serial port.
+    pub woke: Option<Now>,
+}
+
+#[derive(Default)]
+struct Slot {
+    used: bool,
+    ready: Ready,
+}
+
+struct Inner {
+    poll: Poll,
+    events: Events,
+    timer: Option<Timer>,
+    slots: Vec<Slot>,
+    free: Vec<usize>,
+    /// Data arrived since the last [`Reactor::take_activity`].
+    activity: bool,
+}
+
+/// A shared poll: see the module documentation.
+#[derive(Clone)]
+pub struct Reactor {
+    inner: Rc<RefCell<Inner>>,
+}
+
+impl std::fmt::Debug for Reactor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let inner = self.inner.borrow();
+        f.debug_struct("Reactor")
+            .field("registered", &inner.slots.iter().filter(|s| s.used).count())
+            .finish()
+    }
+}
+
+impl Reactor {
+    /// A new poll instance.
+    pub fn new() -> io::Result<Reactor> {
+        let poll = Poll::new()?;
+        let mut slots = Vec::with_capacity(64);
+        slots.push(Slot {
+            used: true,
+            ready: Ready::default(),
+        });
+        Ok(Reactor {
+            inner: Rc::new(RefCell::new(Inner {
+                poll,
+                events: Events::with_capacity(256),
+                timer: None,
+                slots,
+                free: Vec::new(),
+                activity: false,
+            })),
+        })
+    }
+
+    /// True when both handles are the same reactor.
+    pub fn same_as(&self, other: &Reactor) -> bool {
+        Rc::ptr_eq(&self.inner, &other.inner)
+    }
+
+    fn alloc(inner: &mut Inner) -> Token {
+        let i = match inner.free.pop() {
+            Some(i) => i,
+            None => {
+                inner.slots.push(Slot::default());
+                inner.slots.len() - 1
+            }
+        };
+        inner.slots[i] = Slot {
+            used: true,
+            ready: Ready::default(),
+        };
+        Token(i)
+    }
+
+    /// Registers a socket (or any mio source) and returns its token.
+    pub fn register(&self, source: &mut impl Source, interest: Interest) -> io::Result<Token> {
+        let mut inner = self.inner.borrow_mut();
+        let token = Self::alloc(&mut inner);
+        if let Err(e) = inner.poll.registry().register(source, token, interest) {
+            inner.slots[token.0].used = false;
+            inner.free.push(token.0);
+            return Err(e);
+        }
+        Ok(token)
+    }
+
+    /// Registers a raw file descriptor (a serial port, an input device).
+    pub fn register_fd(&self, fd: std::os::fd::RawFd, interest: Interest) -> io::Result<Token> {
+        self.register(&mut mio::unix::SourceFd(&fd), interest)
+    }
+
+    /// Forgets a registration; the token may be reused.
+    pub fn deregister(&self, source: &mut impl Source, token: Token) {
+        let mut inner = self.inner.borrow_mut();
+        let _ = inner.poll.registry().deregister(source);
+        if let Some(slot) = inner.slots.get_mut(token.0).filter(|s| s.used) {
+            slot.used = false;
+            slot.ready = Ready::default();
+            inner.free.push(token.0);
+        }
+    }
+
+    /// [`deregister`](Self::deregister) for a raw file descriptor.
+    pub fn deregister_fd(&self, fd: std::os::fd::RawFd, token: Token) {
+        self.deregister(&mut mio::unix::SourceFd(&fd), token);
+    }
+
+    /// Takes (and clears) what the polls saw for `token` since the last call.
+    pub fn take(&self, token: Token) -> Ready {
+        let mut inner = self.inner.borrow_mut();
+        match inner.slots.get_mut(token.0) {
+            Some(s) if s.used => std::mem::take(&mut s.ready),
+            _ => Ready::default(),
+        }
+    }
+
+    /// Checks for readiness without waiting.
+    pub fn poll_now(&self) -> io::Result<bool> {
+        self.poll(Some(Duration::ZERO))
+    }
+
+    /// Waits until something is ready, `deadline` passes (woken precisely through a timer,
+    /// not on the poll's millisecond grid) or `max` elapses. Returns whether data arrived.
+    pub fn wait(&self, deadline: Option<Instant>, max: Duration) -> io::Result<bool> {
+        let mut timeout = max;
+        if let Some(d) = deadline {
+            let until = d.saturating_duration_since(Instant::now());
+            if until.is_zero() {
+                return self.poll_now();
+            }
+            if until < max {
+                let mut inner = self.inner.borrow_mut();
+                if inner.timer.is_none() {
+                    inner.timer = Timer::new(&inner.poll);
+                }
+                let armed = inner.timer.as_ref().is_some_and(|t| t.arm(until));
+                // Without a timer, fall back to the poll's millisecond timeout.
+                timeout = if armed { max } else { until };
+            }
+        }
+        self.poll(Some(timeout))
+    }
+
+    fn poll(&self, timeout: Option<Duration>) -> io::Result<bool> {
+        let mut inner = self.inner.borrow_mut();
+        let inner = &mut *inner;
+        match inner.poll.poll(&mut inner.events, timeout) {
+            Ok(()) => {}
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => return Ok(false),
+            Err(e) => return Err(e),
+        }
+        if inner.events.is_empty() {
+            return Ok(false);
+        }
+        // The time the poll woke: the arrival time of whatever it woke for.
+        let woke = Now::read();
+        let mut any = false;
+        for ev in inner.events.iter() {
+            if ev.token() == TIMER {
+                if let Some(t) = &inner.timer {
+                    t.clear();
+                }
+                continue;
+            }
+            // Only incoming data counts as activity: write-space events follow every send.
+            any |= ev.is_readable();
+            let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
+                continue;
+            };
+            let r = &mut slot.ready;
+            if ev.is_readable() || ev.is_read_closed() || ev.is_error() {
+                if !r.readable {
+                    r.woke = Some(woke);
+                }
+                r.readable = true;
+            }
+            r.read_closed |= ev.is_read_closed() || ev.is_error();
+            r.error |= ev.is_error();
+            r.writable |= ev.is_writable() || ev.is_error();
+        }
+        inner.activity |= any;
+        Ok(any)
+    }
+
+    /// True once since the last call if data arrived (for a server's busy-poll window).
+    pub fn take_activity(&self) -> bool {
+        std::mem::take(&mut self.inner.borrow_mut().activity)
+    }
+
+    /// Notes that data arrived outside a poll (a read that found more than readiness said).
+    pub(crate) fn note_activity(&self) {
+        self.inner.borrow_mut().activity = true;
+    }
+}
+
+/// A one-shot monotonic timer in the poll set (Linux timerfd).
+#[cfg(any(target_os = "linux", target_os = "android"))]
+struct Timer(nix::sys::timerfd::TimerFd);
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+struct Timer;
+
+#[cfg(any(target_os = "linux", target_os = "android"))]
+impl Timer {
+    fn new(poll: &Poll) -> Option<Timer> {
+        use nix::sys::timerfd::{ClockId, TimerFd, TimerFlags};
+        use std::os::fd::AsRawFd;
+        let fd = TimerFd::new(ClockId::CLOCK_MONOTONIC, TimerFlags::TFD_NONBLOCK).ok()?;
+        poll.registry()
+            .register(
+                &mut mio::unix::SourceFd(&fd.as_raw_fd()),
+                TIMER,
+                Interest::READABLE,
+            )
+            .ok()?;
+        Some(Timer(fd))
+    }
+
+    /// Fires once after `d`; false if the timer cannot be set.
+    fn arm(&self, d: Duration) -> bool {
+        use nix::sys::time::TimeSpec;
+        use nix::sys::timerfd::{Expiration, TimerSetTimeFlags};
+        let d = d.max(Duration::from_nanos(1));
+        self.0
+            .set(
+                Expiration::OneShot(TimeSpec::from_duration(d)),
+                TimerSetTimeFlags::empty(),
+            )
+            .is_ok()
+    }
+
+    fn clear(&self) {
+        use std::os::fd::AsRawFd;
+        let _ = nix::unistd::read(self.0.as_raw_fd(), &mut [0u8; 8]);
+    }
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+impl Timer {
+    fn new(_: &Poll) -> Option<Timer> {
+        None
+    }
+    fn arm(&self, _: Duration) -> bool {
+        false
+    }
+    fn clear(&self) {}
+}

@@ -1,0 +1,296 @@
+//! The byte buffers of one peer: TCP output, UDP output, UDP input. Sized when the peer needs
+//! them and reused after that, so steady-state traffic allocates nothing; a peer that never
+//! completes its handshake costs a few hundred bytes, not the 300 KB a connected one holds.
+
+use std::net::{Ipv4Addr, SocketAddrV4};
+
+use crate::wire::header::{encode_message, Header};
+use crate::wire::{MAX_UDP_DATAGRAM, MAX_UDP_INBOUND};
+
+/// Bytes waiting to go out on TCP. Grows only under backlog, up to `limit`.
+#[derive(Debug)]
+pub(crate) struct TxBuffer {
+    buf: Vec<u8>,
+    sent: usize,
+    pub(crate) limit: usize,
+}
+
+/// The reliable backlog passed its limit: the peer is not reading.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Backlogged {
+    pub(crate) pending: usize,
+}
+
+impl TxBuffer {
+    pub(crate) fn new(initial: usize, limit: usize) -> TxBuffer {
+        TxBuffer {
+            buf: Vec::with_capacity(initial),
+            sent: 0,
+            limit,
+        }
+    }
+
+    pub(crate) fn pending(&self) -> &[u8] {
+        &self.buf[self.sent..]
+    }
+
+    pub(crate) fn pending_len(&self) -> usize {
+        self.buf.len() - self.sent
+    }
+
+    pub(crate) fn consume(&mut self, n: usize) {
+        self.sent += n;
+        if self.sent >= self.buf.len() {
+            self.buf.clear();
+            self.sent = 0;
+        }
+    }
+
+    pub(crate) fn push_raw(&mut self, bytes: &[u8]) -> Result<(), Backlogged> {
+        let at = self.reserve(bytes.len())?;
+        self.buf[at..at + bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    pub(crate) fn push_message(&mut self, h: &Header, payload: &[u8]) -> Result<(), Backlogged> {
+        let size = h.wire_size();
+        let at = self.reserve(size)?;
+        encode_message(&mut self.buf[at..at + size], h, payload);
+        Ok(())
+    }
+
+    /// Makes room for `n` more bytes at the end and returns where they start.
+    fn reserve(&mut self, n: usize) -> Result<usize, Backlogged> {
+        let pending = self.pending_len();
+        if pending + n > self.limit {
+            return Err(Backlogged { pending });
+        }
+        if self.sent > 0 && self.buf.len() + n > self.buf.capacity() {
+            self.buf.copy_within(self.sent.., 0);
+            self.buf.truncate(pending);
+            self.sent = 0;
+        }
+        let at = self.buf.len();
+        self.buf.resize(at + n, 0);
+        Ok(at)
+    }
+}
+
+/// Datagrams waiting to go out on UDP: the one being filled plus a ring of full ones. When the
+/// ring is full the oldest datagram is dropped: unreliable traffic is what gives way first.
+/// The ring is allocated with the first message (peers on the TCP-only path never need it).
+#[derive(Debug, Default)]
+pub(crate) struct DatagramQueue {
+    slots: Vec<u8>,
+    lens: Vec<usize>,
+    head: usize,
+    count: usize,
+    /// Datagrams dropped because the peer's UDP path could not keep up.
+    pub(crate) dropped: u64,
+}
+
+pub(crate) const DATAGRAM_SLOTS: usize = 64;
+
+impl DatagramQueue {
+    fn tail_slot(&self) -> usize {
+        (self.head + self.count - 1) % DATAGRAM_SLOTS
+    }
+
+    /// Appends a message, starting a new datagram when the current one is full.
+    pub(crate) fn push_message(&mut self, h: &Header, payload: &[u8]) -> bool {
+        let size = h.wire_size();
+        if size > MAX_UDP_DATAGRAM {
+            return false;
+        }
+        if self.slots.is_empty() {
+            self.slots = vec![0; DATAGRAM_SLOTS * MAX_UDP_DATAGRAM];
+            self.lens = vec![0; DATAGRAM_SLOTS];
+        }
+        // The last slot is "open" while it has room; otherwise open a new one.
+        let need_new = self.count == 0 || self.lens[self.tail_slot()] + size > MAX_UDP_DATAGRAM;
+        if need_new {
+            if self.count == DATAGRAM_SLOTS {
+                self.head = (self.head + 1) % DATAGRAM_SLOTS;
+                self.count -= 1;
+                self.dropped += 1;
+            }
+            self.count += 1;
+            let t = self.tail_slot();
+            self.lens[t] = 0;
+        }
+        let t = self.tail_slot();
+        let start = t * MAX_UDP_DATAGRAM + self.lens[t];
+        encode_message(&mut self.slots[start..start + size], h, payload);
+        self.lens[t] += size;
+        true
+    }
+
+    /// The oldest datagram waiting, if any.
+    pub(crate) fn front(&self) -> Option<&[u8]> {
+        (self.count > 0).then(|| {
+            let s = self.head * MAX_UDP_DATAGRAM;
+            &self.slots[s..s + self.lens[self.head]]
+        })
+    }
+
+    pub(crate) fn pop_front(&mut self) {
+        if self.count > 0 {
+            self.head = (self.head + 1) % DATAGRAM_SLOTS;
+            self.count -= 1;
+        }
+    }
+
+    pub(crate) fn clear(&mut self) {
+        self.count = 0;
+        self.head = 0;
+    }
+
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
+        self.count
+    }
+}
+
+/// Bytes of one inbox slot: a C++ receiver's 1480-byte limit plus alignment room.
+pub const INBOX_SLOT: usize = MAX_UDP_INBOUND + 8;
+/// Datagrams taken per receive call. Two, so that a batch of one proves the queue empty.
+pub const INBOX_SLOTS: usize = 2;
+
+/// Received datagrams (up to [`INBOX_SLOTS`] per system call) with their sources, walked
+/// message by message. The shell receives straight into it.
+#[derive(Debug)]
+pub struct DatagramInbox {
+    /// `INBOX_SLOTS` slots of `INBOX_SLOT` bytes.
+    pub buf: Vec<u8>,
+    /// Length of each received datagram.
+    pub lens: [usize; INBOX_SLOTS],
+    /// Source of each received datagram.
+    pub from: [SocketAddrV4; INBOX_SLOTS],
+    /// Datagrams held.
+    count: usize,
+    /// Datagram being walked.
+    cur: usize,
+    /// Position inside it.
+    pos: usize,
+}
+
+impl Default for DatagramInbox {
+    fn default() -> Self {
+        DatagramInbox {
+            buf: vec![0; INBOX_SLOT * INBOX_SLOTS],
+            lens: [0; INBOX_SLOTS],
+            from: [SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0); INBOX_SLOTS],
+            count: 0,
+            cur: 0,
+            pos: 0,
+        }
+    }
+}
+
+impl DatagramInbox {
+    /// Everything received has been walked.
+    pub(crate) fn is_drained(&self) -> bool {
+        self.cur >= self.count
+    }
+
+    /// Starts walking `count` freshly received datagrams.
+    pub(crate) fn filled(&mut self, count: usize) {
+        self.count = count.min(INBOX_SLOTS);
+        self.cur = 0;
+        self.pos = 0;
+    }
+
+    /// Source of the datagram being walked.
+    pub(crate) fn current_source(&self) -> SocketAddrV4 {
+        self.from[self.cur.min(INBOX_SLOTS - 1)]
+    }
+
+    /// The unwalked rest of the current datagram.
+    pub(crate) fn current(&self) -> &[u8] {
+        if self.is_drained() {
+            return &[];
+        }
+        let start = self.cur * INBOX_SLOT;
+        let len = self.lens[self.cur].min(INBOX_SLOT);
+        &self.buf[start + self.pos.min(len)..start + len]
+    }
+
+    /// Moves past `n` bytes of the current datagram, to the next datagram at its end.
+    pub(crate) fn advance(&mut self, n: usize) {
+        self.pos += n;
+        if self.cur < self.count && self.pos >= self.lens[self.cur] {
+            self.cur += 1;
+            self.pos = 0;
+        }
+    }
+
+    /// Skips the rest of the current datagram (malformed, empty, or from a stranger).
+    pub(crate) fn skip_datagram(&mut self) {
+        if self.cur < self.count {
+            self.cur += 1;
+            self.pos = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::time::TimeVal;
+
+    fn header(len: usize) -> Header {
+        Header {
+            payload_len: len,
+            time: TimeVal::ZERO,
+            sender: 0,
+            type_id: 5,
+            seq: 0,
+        }
+    }
+
+    #[test]
+    fn tx_buffer_enforces_limit_and_compacts() {
+        let mut tx = TxBuffer::new(128, 200);
+        tx.push_message(&header(64), &[1; 64]).unwrap();
+        assert_eq!(tx.pending_len(), 88);
+        tx.push_message(&header(64), &[2; 64]).unwrap();
+        assert!(tx.push_message(&header(64), &[3; 64]).is_err());
+        tx.consume(88);
+        tx.push_message(&header(64), &[3; 64]).unwrap();
+        assert_eq!(tx.pending_len(), 176);
+        assert_eq!(tx.pending()[24], 2);
+    }
+
+    #[test]
+    fn datagram_queue_packs_and_drops_oldest() {
+        let mut q = DatagramQueue::default();
+        for _ in 0..16 {
+            assert!(q.push_message(&header(64), &[0; 64]));
+        }
+        // 16 × 88 bytes = 1408 fit in one 1472-byte datagram.
+        assert_eq!(q.front().unwrap().len(), 1408);
+        q.push_message(&header(64), &[0; 64]);
+        assert_eq!(q.len(), 2);
+        for _ in 0..(DATAGRAM_SLOTS * 16) {
+            q.push_message(&header(64), &[0; 64]);
+        }
+        assert_eq!(q.len(), DATAGRAM_SLOTS);
+        assert!(q.dropped > 0);
+    }
+
+    #[test]
+    fn inbox_walks_datagrams_and_skips() {
+        let mut inbox = DatagramInbox::default();
+        inbox.buf[..3].copy_from_slice(b"abc");
+        inbox.buf[INBOX_SLOT..INBOX_SLOT + 2].copy_from_slice(b"de");
+        inbox.lens = [3, 2];
+        inbox.filled(2);
+        assert_eq!(inbox.current(), b"abc");
+        inbox.advance(1);
+        assert_eq!(inbox.current(), b"bc");
+        inbox.skip_datagram();
+        assert_eq!(inbox.current(), b"de");
+        inbox.advance(2);
+        assert!(inbox.is_drained());
+    }
+}

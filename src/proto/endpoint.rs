@@ -1,0 +1,336 @@
+//! One peer of a session, without sockets: its phase, the bytes in and out, what its ids mean
+//! here, and the deadline it must meet.
+
+use std::net::SocketAddrV4;
+use std::time::Instant;
+
+use super::buffers::{Backlogged, DatagramInbox, DatagramQueue, TxBuffer};
+use super::names::IdSet;
+use super::PeerId;
+use crate::log::LogWriter;
+use crate::time::TimeVal;
+use crate::wire::framing::StreamDecoder;
+use crate::wire::header::{Header, HEADER_LEN};
+use crate::wire::{class, padded_len, COOKIE_LEN, MAX_IDS, MAX_UDP_DATAGRAM};
+
+/// A log file sink as the session sees it: bytes out, nothing else.
+pub(crate) type LogSink = LogWriter<Box<dyn std::io::Write>>;
+
+/// Where a peer is in its life.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Phase {
+    /// TCP connect in progress (server call-back, or TCP-only client).
+    Connecting,
+    /// Our cookie is queued; waiting for the peer's 24 bytes.
+    AwaitingCookie,
+    /// Cookies exchanged; our UDP socket is being bound before we describe ourselves.
+    Describing,
+    /// Handshake complete: messages flow.
+    Connected,
+}
+
+/// Which channel a packed message went to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Channel {
+    Tcp,
+    Udp,
+    Discarded,
+}
+
+/// Remote id → local id for one kind of name, with what the peer holds of our name table.
+#[derive(Debug, Default)]
+pub(crate) struct RemoteNames {
+    /// Remote id → local id (−1 when not described or not mapped).
+    map: Vec<i32>,
+    /// Learned local names this peer holds (released when it leaves).
+    pub(crate) held: IdSet,
+    /// Name-to-id bindings this peer described (limited per peer).
+    pub(crate) described: usize,
+}
+
+impl RemoteNames {
+    /// Local id for a remote id, or −1.
+    #[inline]
+    pub(crate) fn lookup(&self, remote: i32) -> i32 {
+        usize::try_from(remote)
+            .ok()
+            .and_then(|r| self.map.get(r).copied())
+            .unwrap_or(-1)
+    }
+
+    /// Records what a remote id means locally (−1: known to be unmappable here).
+    pub(crate) fn bind(&mut self, remote: i32, local: i32) {
+        let r = remote as usize;
+        if self.map.len() <= r {
+            self.map.resize(r + 1, -1);
+        }
+        self.map[r] = local;
+    }
+
+    /// Every local id some remote id maps to.
+    pub(crate) fn locals(&self) -> impl Iterator<Item = i32> + '_ {
+        self.map.iter().copied().filter(|&l| l >= 0)
+    }
+
+    /// Forgets the mapping (a DISCONNECT from the peer); held names stay held until the peer
+    /// leaves, so the ids cannot change under a peer that re-describes them.
+    pub(crate) fn clear(&mut self) {
+        self.map.clear();
+    }
+
+    /// True for a remote id a C++ peer would accept.
+    pub(crate) fn valid_id(remote: i32) -> bool {
+        (0..MAX_IDS as i32).contains(&remote)
+    }
+}
+
+/// The sans-IO part of one peer.
+pub(crate) struct Endpoint {
+    pub(crate) id: PeerId,
+    pub(crate) phase: Phase,
+    /// No UDP channel in either direction (TCP-only path).
+    pub(crate) tcp_only: bool,
+    /// The peer's TCP address.
+    pub(crate) addr: SocketAddrV4,
+    /// Our end of the TCP connection (the address we announce for UDP).
+    pub(crate) local: Option<SocketAddrV4>,
+    /// The peer's address as text, for messages.
+    pub(crate) label: String,
+    cookie: [u8; COOKIE_LEN],
+    cookie_len: usize,
+    /// Reassembles the TCP stream; made when the handshake completes.
+    pub(crate) rx: Option<StreamDecoder>,
+    /// Inbound datagrams; made when our UDP socket for this peer is bound.
+    pub(crate) udp_rx: Option<DatagramInbox>,
+    pub(crate) tx: TxBuffer,
+    pub(crate) udp_tx: DatagramQueue,
+    /// The peer announced a UDP port and our outbound socket is connected to it.
+    pub(crate) udp_ready: bool,
+    pub(crate) senders: RemoteNames,
+    pub(crate) types: RemoteNames,
+    pub(crate) seq_tcp: u32,
+    pub(crate) seq_udp: u32,
+    /// Version text of the peer's cookie once read.
+    pub(crate) peer_version: Option<String>,
+    /// When the peer must have reached the next phase (connect, then handshake).
+    pub(crate) deadline: Option<Instant>,
+    /// When the peer completed its handshake.
+    pub(crate) connected_at: Option<Instant>,
+    /// Messages taken from this peer in the current pass (fairness).
+    pub(crate) budget: usize,
+    /// Unreliable messages not queued because the reliable backlog was past half its limit.
+    pub(crate) unreliable_dropped: u64,
+    /// The peer has described a type: its own sender table is complete (C++ describes every
+    /// sender, then every type), so senders described after this are echoes of names other
+    /// peers taught it, or later registrations.
+    pub(crate) senders_complete: bool,
+    /// Local sender ids this peer offers (described in its own table).
+    pub(crate) offered: IdSet,
+    /// Datagrams dropped because they came from another address than the peer's.
+    pub(crate) foreign_datagrams: u64,
+    /// This peer's incoming log (`vrpn_server -li`: one file per client).
+    pub(crate) log_in: Option<LogSink>,
+    /// A call-back connect started by a connection request (coalesced per address).
+    pub(crate) callback: bool,
+}
+
+impl Endpoint {
+    pub(crate) fn new(id: PeerId, tcp_only: bool, addr: SocketAddrV4, tx_limit: usize) -> Endpoint {
+        Endpoint {
+            id,
+            phase: Phase::Connecting,
+            tcp_only,
+            addr,
+            local: None,
+            label: addr.to_string(),
+            cookie: [0; COOKIE_LEN],
+            cookie_len: 0,
+            rx: None,
+            udp_rx: None,
+            tx: TxBuffer::new(1024, tx_limit),
+            udp_tx: DatagramQueue::default(),
+            udp_ready: false,
+            senders: RemoteNames::default(),
+            types: RemoteNames::default(),
+            seq_tcp: 0,
+            seq_udp: 0,
+            peer_version: None,
+            deadline: None,
+            connected_at: None,
+            budget: 0,
+            unreliable_dropped: 0,
+            senders_complete: false,
+            offered: IdSet::default(),
+            foreign_datagrams: 0,
+            log_in: None,
+            callback: false,
+        }
+    }
+
+    /// Where the next TCP bytes should be read to: the rest of the cookie while greeting (so a
+    /// read never takes more than the greeting), the stream decoder after.
+    pub(crate) fn rx_spare(&mut self) -> &mut [u8] {
+        match self.phase {
+            Phase::Connecting => &mut [],
+            Phase::AwaitingCookie => &mut self.cookie[self.cookie_len..],
+            Phase::Describing | Phase::Connected => match self.rx.as_mut() {
+                Some(rx) => rx.spare(),
+                None => &mut [],
+            },
+        }
+    }
+
+    /// Marks `n` bytes of [`rx_spare`](Self::rx_spare) as filled.
+    pub(crate) fn rx_commit(&mut self, n: usize) {
+        match self.phase {
+            Phase::AwaitingCookie => self.cookie_len = (self.cookie_len + n).min(COOKIE_LEN),
+            Phase::Describing | Phase::Connected => {
+                if let Some(rx) = self.rx.as_mut() {
+                    rx.commit(n);
+                }
+            }
+            Phase::Connecting => {}
+        }
+    }
+
+    /// The peer's whole cookie, once it arrived.
+    pub(crate) fn cookie(&self) -> Option<&[u8; COOKIE_LEN]> {
+        (self.phase == Phase::AwaitingCookie && self.cookie_len == COOKIE_LEN)
+            .then_some(&self.cookie)
+    }
+
+    /// Queues a message with the channel its class of service asks for. Messages packed
+    /// before the handshake completes are discarded, as in C++.
+    pub(crate) fn pack(
+        &mut self,
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        payload: &[u8],
+        class_of_service: u32,
+    ) -> Result<Channel, Backlogged> {
+        if self.phase != Phase::Connected {
+            return Ok(Channel::Discarded);
+        }
+        self.pack_always(time, sender, type_id, payload, class_of_service)
+    }
+
+    /// Queues a message whatever the phase (the handshake's own descriptions).
+    pub(crate) fn pack_always(
+        &mut self,
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        payload: &[u8],
+        class_of_service: u32,
+    ) -> Result<Channel, Backlogged> {
+        let reliable = class_of_service & class::RELIABLE != 0;
+        let use_udp = !reliable
+            && self.udp_ready
+            && HEADER_LEN + padded_len(payload.len()) <= MAX_UDP_DATAGRAM;
+        let mut h = Header {
+            payload_len: payload.len(),
+            time,
+            sender,
+            type_id,
+            seq: 0,
+        };
+        if !use_udp && !reliable && self.tx.pending_len() > self.tx.limit / 2 {
+            // The peer is falling behind on TCP: shed unreliable traffic first, so the
+            // reliable backlog limit is reached only by reliable messages.
+            self.unreliable_dropped += 1;
+            return Ok(Channel::Discarded);
+        }
+        if use_udp {
+            h.seq = self.seq_udp;
+            self.seq_udp = self.seq_udp.wrapping_add(1);
+            self.udp_tx.push_message(&h, payload);
+            Ok(Channel::Udp)
+        } else {
+            h.seq = self.seq_tcp;
+            self.seq_tcp = self.seq_tcp.wrapping_add(1);
+            self.tx.push_message(&h, payload)?;
+            Ok(Channel::Tcp)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::Ipv4Addr;
+
+    fn ep(tcp_only: bool, limit: usize) -> Endpoint {
+        let id = PeerId {
+            slot: 0,
+            generation: 1,
+        };
+        Endpoint::new(
+            id,
+            tcp_only,
+            SocketAddrV4::new(Ipv4Addr::LOCALHOST, 1),
+            limit,
+        )
+    }
+
+    #[test]
+    fn unconnected_endpoint_discards_and_routes_by_class() {
+        let mut ep = ep(false, 1 << 20);
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::LOW_LATENCY),
+            Ok(Channel::Discarded)
+        );
+        ep.phase = Phase::Connected;
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::LOW_LATENCY),
+            Ok(Channel::Tcp)
+        );
+        ep.udp_ready = true;
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::LOW_LATENCY),
+            Ok(Channel::Udp)
+        );
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE),
+            Ok(Channel::Tcp)
+        );
+        assert_eq!((ep.seq_tcp, ep.seq_udp), (2, 1));
+    }
+
+    #[test]
+    fn unreliable_gives_way_first_under_backlog() {
+        let mut ep = ep(true, 1000);
+        ep.phase = Phase::Connected;
+        for _ in 0..6 {
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE)
+                .unwrap();
+        }
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::LOW_LATENCY),
+            Ok(Channel::Discarded)
+        );
+        assert_eq!(ep.unreliable_dropped, 1);
+        assert_eq!(
+            ep.pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE),
+            Ok(Channel::Tcp)
+        );
+        while ep
+            .pack(TimeVal::ZERO, 1, 4, &[0; 64], class::RELIABLE)
+            .is_ok()
+        {}
+        assert!(ep.tx.pending_len() <= 1000);
+    }
+
+    #[test]
+    fn greeting_reads_stop_at_the_cookie() {
+        let mut ep = ep(true, 1000);
+        ep.phase = Phase::AwaitingCookie;
+        assert_eq!(ep.rx_spare().len(), COOKIE_LEN);
+        ep.rx_commit(10);
+        assert_eq!(ep.rx_spare().len(), COOKIE_LEN - 10);
+        assert!(ep.cookie().is_none());
+        ep.rx_commit(14);
+        assert!(ep.cookie().is_some());
+        assert!(ep.rx_spare().is_empty());
+    }
+}

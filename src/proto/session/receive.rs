@@ -1,0 +1,440 @@
+//! Turning received bytes into deliveries: framing, the cookie, system messages, id
+//! translation, fairness between peers, and log replay through the same path.
+
+use super::{Kind, Session, RESERVED_FOR_LOCAL};
+use crate::proto::client::Failure;
+use crate::proto::endpoint::{Phase, RemoteNames};
+use crate::proto::names::NameLimit;
+use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, Severity};
+use crate::time::Now;
+use crate::wire::{self, system, MAX_IDS};
+
+/// Where a message came from, for the rules that depend on it.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Via {
+    Tcp,
+    Udp,
+    Log,
+}
+
+/// What handling one message led to.
+enum Outcome {
+    /// Deliver this.
+    Deliver(Delivery),
+    /// Nothing to deliver; carry on.
+    Continue,
+    /// The peer broke the protocol: drop it with this reason.
+    Drop(String),
+}
+
+impl Session {
+    /// The next thing to deliver, or `None` when everything buffered has been consumed (the
+    /// shell should then read more for the peers that want it).
+    pub fn poll_delivery(&mut self, now: Now) -> Option<Delivery> {
+        loop {
+            if let Some(d) = self.queue.pop_front() {
+                return Some(d);
+            }
+            if !self.to_describe.is_empty() {
+                self.describe_new_names(now);
+                continue;
+            }
+            if matches!(self.kind, Kind::File(_)) {
+                return self.next_from_file(now);
+            }
+            let n = self.peers.len();
+            let mut produced = false;
+            for k in 0..n {
+                let i = (self.cursor + k) % n;
+                let Some(p) = self.peers[i].as_ref() else {
+                    continue;
+                };
+                if p.budget >= self.limits.max_messages_per_peer_per_loop {
+                    continue;
+                }
+                if let Some(d) = self.next_from_peer(now, i) {
+                    self.cursor = i;
+                    if let Some(p) = self.peers[i].as_mut() {
+                        p.budget += 1;
+                    }
+                    return Some(d);
+                }
+                if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                    produced = true;
+                    self.cursor = i;
+                    break;
+                }
+            }
+            if !produced {
+                return None;
+            }
+        }
+    }
+
+    /// The next delivery from the bytes buffered for the peer in `slot`.
+    fn next_from_peer(&mut self, now: Now, slot: usize) -> Option<Delivery> {
+        loop {
+            let p = self.peers[slot].as_mut()?;
+            let id = p.id;
+            match p.phase {
+                Phase::Connecting => return None,
+                Phase::AwaitingCookie => {
+                    p.cookie()?;
+                    self.handle_cookie(now, id);
+                    if !self.queue.is_empty() {
+                        return self.queue.pop_front();
+                    }
+                    continue;
+                }
+                Phase::Describing | Phase::Connected => {}
+            }
+            let rx = p.rx.as_mut()?;
+            match rx.next_message() {
+                Some(Ok((h, payload))) => {
+                    let len = payload.len();
+                    self.scratch[..len].copy_from_slice(payload);
+                    match self.handle_message(now, slot, h, len, Via::Tcp) {
+                        Outcome::Deliver(d) => return Some(d),
+                        Outcome::Drop(reason) => {
+                            self.drop_peer(now, id, reason, None);
+                            return self.queue.pop_front();
+                        }
+                        Outcome::Continue => {
+                            if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                                return None;
+                            }
+                            continue;
+                        }
+                    }
+                }
+                Some(Err(e)) => {
+                    let reason = format!("malformed message from {}: {e}", p.label);
+                    self.drop_peer(now, id, reason, Some(Failure::Other(e.to_string())));
+                    return self.queue.pop_front();
+                }
+                None => {}
+            }
+            // Then the datagrams received for this peer.
+            let p = self.peers[slot].as_mut()?;
+            if p.phase != Phase::Connected {
+                return None;
+            }
+            let peer_ip = *p.addr.ip();
+            let named = self.limits.callback_to_named_address;
+            let inbox = p.udp_rx.as_mut()?;
+            if inbox.is_drained() {
+                return None;
+            }
+            let source = inbox.current_source();
+            if !named && *source.ip() != peer_ip {
+                // Only the peer may speak on its UDP channel: a datagram from anyone else is
+                // dropped unread (it could otherwise inject messages into the session).
+                inbox.skip_datagram();
+                p.foreign_datagrams += 1;
+                if p.foreign_datagrams == 1 {
+                    let text = format!(
+                        "ignoring UDP datagrams sent to {}'s channel from another address \
+                         ({source})",
+                        p.label
+                    );
+                    self.notice(Severity::Warning, text);
+                    return self.queue.pop_front();
+                }
+                continue;
+            }
+            let dg = inbox.current();
+            let mut it = wire::DatagramMessages::new(dg);
+            match it.next() {
+                Some(Ok((h, payload))) => {
+                    let advance = h.wire_size().min(dg.len());
+                    let len = payload.len();
+                    self.scratch[..len].copy_from_slice(payload);
+                    inbox.advance(advance);
+                    match self.handle_message(now, slot, h, len, Via::Udp) {
+                        Outcome::Deliver(d) => return Some(d),
+                        Outcome::Drop(reason) => {
+                            self.drop_peer(now, id, reason, None);
+                            return self.queue.pop_front();
+                        }
+                        Outcome::Continue => {
+                            if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                                return None;
+                            }
+                        }
+                    }
+                }
+                Some(Err(e)) => {
+                    // C++ drops the whole connection on a bad datagram; we drop the datagram.
+                    inbox.skip_datagram();
+                    let t = format!("discarded a malformed UDP datagram from {}: {e}", p.label);
+                    self.notice(Severity::Warning, t);
+                    return self.queue.pop_front();
+                }
+                None => inbox.skip_datagram(),
+            }
+        }
+    }
+
+    /// The next entry of a replayed log that is due, through the same handling as a live
+    /// peer's message.
+    fn next_from_file(&mut self, now: Now) -> Option<Delivery> {
+        loop {
+            let Kind::File(replay) = &mut self.kind else {
+                return None;
+            };
+            if replay.take_reset() {
+                if let Some(p) = self.peers[0].as_mut() {
+                    p.senders.clear();
+                    p.types.clear();
+                }
+                return Some(Delivery::Event(ConnectionEvent::DroppedConnection));
+            }
+            let Some(due) = replay.next_due() else {
+                if let Some(e) = replay.take_error() {
+                    let text = format!(
+                        "replay stopped at damaged data (every whole message before it was \
+                         played): {e}"
+                    );
+                    return Some(Delivery::Notice(Notice {
+                        severity: Severity::Error,
+                        text,
+                    }));
+                }
+                return None;
+            };
+            let len = due.header.payload_len as usize;
+            self.scratch[..len]
+                .copy_from_slice(&replay.bytes()[due.payload_at..due.payload_at + len]);
+            if let Some(w) = self.logs.incoming.as_mut() {
+                // Re-log of a replay: original entry, playback wall-clock time (as C++).
+                let _ = w.log_message(
+                    due.header.type_id,
+                    due.header.sender,
+                    now.wall,
+                    &self.scratch[..len],
+                );
+            }
+            let h = wire::Header {
+                payload_len: len,
+                time: due.header.time(),
+                sender: due.header.sender,
+                type_id: due.header.type_id,
+                seq: 0,
+            };
+            match self.handle_message(now, 0, h, len, Via::Log) {
+                Outcome::Deliver(d) => return Some(d),
+                Outcome::Drop(text) => self.notice(Severity::Warning, text),
+                Outcome::Continue => {}
+            }
+            if !self.to_describe.is_empty() {
+                self.describe_new_names(now);
+            }
+            if let Some(d) = self.queue.pop_front() {
+                return Some(d);
+            }
+        }
+    }
+
+    /// Interprets one message whose payload is in `scratch[..len]`: system messages update
+    /// tables; user messages are translated and returned for delivery.
+    fn handle_message(
+        &mut self,
+        _now: Now,
+        slot: usize,
+        h: wire::Header,
+        len: usize,
+        via: Via,
+    ) -> Outcome {
+        let Session {
+            peers,
+            logs,
+            scratch,
+            limits,
+            ..
+        } = self;
+        let Some(p) = peers[slot].as_mut() else {
+            return Outcome::Continue;
+        };
+        let payload = &scratch[..len];
+        if via != Via::Log {
+            if let Some(w) = p.log_in.as_mut().or(logs.incoming.as_mut()) {
+                let _ = w.log_message(h.type_id, h.sender, h.time, payload);
+            }
+        }
+        if len > limits.max_message_payload {
+            return Outcome::Drop(format!(
+                "{} sent a {len}-byte message; the limit is {} bytes \
+                 (Limits::max_message_payload)",
+                p.label, limits.max_message_payload
+            ));
+        }
+        if matches!(
+            h.type_id,
+            system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION
+        ) {
+            return self.handle_description(slot, h, len);
+        }
+        match h.type_id {
+            system::UDP_DESCRIPTION => {
+                if via != Via::Tcp || p.tcp_only {
+                    // Only the peer's own TCP stream may set its UDP channel (a datagram could
+                    // come from anyone); replayed logs open nothing.
+                    return Outcome::Continue;
+                }
+                let Ok(host) = system::decode_udp_description(payload) else {
+                    return Outcome::Continue;
+                };
+                let port = h.sender;
+                if !(1..=65535).contains(&port) {
+                    return Outcome::Continue;
+                }
+                // The datagrams go to the peer's own address unless the server was set up for
+                // multi-homed clients; a host name is never resolved in the loop.
+                let ip = match (limits.callback_to_named_address, host.parse()) {
+                    (true, Ok(ip)) => ip,
+                    _ => *p.addr.ip(),
+                };
+                p.udp_ready = false;
+                let addr = std::net::SocketAddrV4::new(ip, port as u16);
+                let id = p.id;
+                self.io.push_back(IoRequest::OpenUdpOut { peer: id, addr });
+                Outcome::Continue
+            }
+            system::LOG_DESCRIPTION => {
+                // C++ servers open the named files on the server machine. An unauthenticated
+                // peer choosing paths we write to is a hazard, so the request is refused.
+                if let Ok(d) = system::decode_log_description(payload) {
+                    let text = format!(
+                        "{} asked this side to log (incoming {:?}, outgoing {:?}); remote \
+                         logging requests are refused: log locally with -li/-lo instead",
+                        p.label, d.incoming, d.outgoing
+                    );
+                    return Outcome::Deliver(Delivery::Notice(Notice {
+                        severity: Severity::Warning,
+                        text,
+                    }));
+                }
+                Outcome::Continue
+            }
+            system::DISCONNECT => {
+                p.senders.clear();
+                p.types.clear();
+                Outcome::Continue
+            }
+            t if t < 0 => Outcome::Continue,
+            t => {
+                let local_type = p.types.lookup(t);
+                if local_type < 0 {
+                    return Outcome::Continue; // never described: ignored, as C++ does
+                }
+                let local_sender = p.senders.lookup(h.sender);
+                Outcome::Deliver(Delivery::Message {
+                    time: h.time,
+                    sender: local_sender,
+                    type_id: local_type,
+                    len,
+                })
+            }
+        }
+    }
+
+    /// A sender or type description: learn the name, map the peer's id to ours.
+    fn handle_description(&mut self, slot: usize, h: wire::Header, len: usize) -> Outcome {
+        let is_sender = h.type_id == system::SENDER_DESCRIPTION;
+        let kind = if is_sender { "sender" } else { "type" };
+        let Session {
+            peers,
+            names,
+            scratch,
+            limits,
+            to_describe,
+            queue,
+            names_refused,
+            ..
+        } = self;
+        let Some(p) = peers[slot].as_mut() else {
+            return Outcome::Continue;
+        };
+        // The id first: a description with an id no C++ peer could send is a protocol error,
+        // and must not leave its name behind in our table.
+        if !RemoteNames::valid_id(h.sender) {
+            return Outcome::Drop(format!(
+                "{} described id {} outside VRPN's 0..{MAX_IDS} range",
+                p.label, h.sender
+            ));
+        }
+        let name = match system::decode_description_bytes(&scratch[..len]) {
+            Ok(n) => n,
+            Err(e) => return Outcome::Drop(format!("bad description from {}: {e}", p.label)),
+        };
+        let completes = !is_sender && !p.senders_complete;
+        if completes {
+            p.senders_complete = true;
+            queue.push_back(Delivery::PeerSendersComplete);
+        }
+        let table = names.table(is_sender);
+        let remote = if is_sender {
+            &mut p.senders
+        } else {
+            &mut p.types
+        };
+        let already = table.get(name);
+        let rebinds = already.map_or(true, |l| remote.lookup(h.sender) != l);
+        if rebinds {
+            remote.described += 1;
+            if remote.described > limits.max_names_per_peer {
+                return Outcome::Drop(format!(
+                    "{} described more than {} {kind} names (Limits::max_names_per_peer)",
+                    p.label, limits.max_names_per_peer
+                ));
+            }
+        }
+        let room = table.learned_count() < MAX_IDS - RESERVED_FOR_LOCAL;
+        let local = match table.learn(name, room) {
+            Ok((local, new, held)) => {
+                if held && !remote.held.insert(local) {
+                    // Described again under another id: the peer holds the name only once.
+                    table.release(local);
+                }
+                if new {
+                    to_describe.push((is_sender, local));
+                }
+                local
+            }
+            Err(NameLimit::TableFull) => {
+                // No room: the name stays unknown here (its messages are ignored, as those of
+                // an undescribed name), and nobody is dropped for it.
+                remote.bind(h.sender, -1);
+                *names_refused += 1;
+                if *names_refused == 1 || names_refused.is_power_of_two() {
+                    let text = format!(
+                        "no room for {kind} name {:?} from {} ({} names refused so far: the \
+                         name table is full of names peers described); its messages are \
+                         ignored",
+                        String::from_utf8_lossy(name),
+                        p.label,
+                        names_refused
+                    );
+                    queue.push_back(Delivery::Notice(Notice {
+                        severity: Severity::Warning,
+                        text,
+                    }));
+                }
+                return Outcome::Continue;
+            }
+            Err(e) => {
+                return Outcome::Drop(format!("{} described a name we cannot hold: {e}", p.label))
+            }
+        };
+        remote.bind(h.sender, local);
+        if is_sender {
+            // A sender is one the peer offers if it is in the peer's own table (described
+            // before its first type) or a name this side never registered.
+            let own = !p.senders_complete || !names.senders.is_registered(local);
+            if own && p.offered.insert(local) {
+                return Outcome::Deliver(Delivery::PeerSender(local));
+            }
+        }
+        Outcome::Continue
+    }
+}
