@@ -1050,12 +1050,12 @@ impl Session {
     }
 
     /// The sender names connected peers offer: those in their own tables, not the echoes of
-    /// names this side described to them.
+    /// names this side described to them, nor `VRPN Control` (sender 0 of every connection).
     pub fn peer_sender_names(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
         for p in self.peers.iter().flatten() {
             for local in p.senders.locals() {
-                if !p.offered.contains(local) {
+                if local == 0 || !p.offered.contains(local) {
                     continue;
                 }
                 if let Some(n) = self.names.senders.name(local) {
