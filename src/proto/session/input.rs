@@ -1,0 +1,297 @@
+//! What the shell reports about the sockets: accepted connections, connection requests,
+//! completed connects, bytes and datagrams read, closes.
+
+use std::net::SocketAddrV4;
+use std::time::Instant;
+
+use super::{Kind, Session};
+use crate::proto::buffers::DatagramInbox;
+use crate::proto::client::Failure;
+use crate::proto::endpoint::Phase;
+use crate::proto::server::{Decision, Ignored, RequestPolicy};
+use crate::proto::{IoRequest, PeerId, Severity};
+use crate::time::Now;
+use crate::wire;
+
+impl Session {
+    // ------------------------------------------------------------------ server inputs
+
+    /// Server: the TCP listener accepted a client (the TCP-only path: anything accepted on the
+    /// TCP port is TCP-only, as in C++). `None`: refused (the shell closes the socket).
+    pub fn handle_accept(
+        &mut self,
+        now: Now,
+        from: SocketAddrV4,
+        local: SocketAddrV4,
+    ) -> Option<PeerId> {
+        if self.live_peers() >= self.limits.max_connections {
+            let text = format!(
+                "refused TCP client {from}: {} clients already connected (limit)",
+                self.limits.max_connections
+            );
+            self.notice(Severity::Warning, text);
+            return None;
+        }
+        let id = self.alloc_peer(true, from);
+        self.open_peer_log(id);
+        self.start_greeting(now, id, local);
+        Some(id)
+    }
+
+    /// Server: a datagram arrived on the server port from `from` — a connection request.
+    pub fn handle_request(&mut self, now: Now, from: SocketAddrV4, datagram: &[u8]) {
+        let limits = self.limits;
+        let req = match wire::lob::parse_request(datagram) {
+            Ok(r) => r,
+            Err(e) => {
+                let first = match &mut self.kind {
+                    Kind::Server(p) => p.count(Ignored::Malformed),
+                    _ => false,
+                };
+                if first {
+                    let text = format!("ignored a bad connection request from {from}: {e}");
+                    self.notice(Severity::Warning, text);
+                }
+                self.request_summary(now.mono);
+                return;
+            }
+        };
+        let target = RequestPolicy::target(from, &req, &limits);
+        let busy = self.peers.iter().flatten().any(|p| {
+            p.callback
+                && p.addr == target
+                && matches!(p.phase, Phase::Connecting | Phase::AwaitingCookie)
+        });
+        let (pending, live) = (self.pending_callbacks(), self.live_peers());
+        let Kind::Server(policy) = &mut self.kind else {
+            return;
+        };
+        match policy.decide(now.mono, target, busy, pending, live, &limits) {
+            Decision::CallBack(addr) => {
+                let id = self.alloc_peer(false, addr);
+                let ep = self.peer_mut(id).expect("just made");
+                ep.callback = true;
+                ep.deadline = Some(now.mono + limits.connect_timeout);
+                self.open_peer_log(id);
+                self.io.push_back(IoRequest::Connect { peer: id, addr });
+            }
+            Decision::Ignore(_) => {}
+        }
+        self.request_summary(now.mono);
+    }
+
+    pub(super) fn request_summary(&mut self, now: Instant) {
+        if let Kind::Server(p) = &mut self.kind {
+            if let Some(text) = p.summary(now) {
+                self.notice(Severity::Warning, text);
+            }
+        }
+    }
+
+    fn open_peer_log(&mut self, id: PeerId) {
+        let Some(make) = self.logs.per_peer.as_mut() else {
+            return;
+        };
+        self.logs.peers_logged += 1;
+        match make(self.logs.peers_logged) {
+            Ok(w) => {
+                if let Some(p) = self.peer_mut(id) {
+                    p.log_in = Some(w);
+                }
+            }
+            Err(e) => self.notice(Severity::Error, format!("cannot open incoming log: {e}")),
+        }
+    }
+
+    // ------------------------------------------------------------------ client inputs
+
+    /// Client: the call-back listener accepted a connection from the server. `None`: a peer
+    /// already exists (the shell closes this one).
+    pub fn handle_callback(
+        &mut self,
+        now: Now,
+        from: SocketAddrV4,
+        local: SocketAddrV4,
+    ) -> Option<PeerId> {
+        if !matches!(self.kind, Kind::Client(_)) || self.peers.iter().flatten().next().is_some() {
+            return None;
+        }
+        let id = self.alloc_peer(false, from);
+        self.start_greeting(now, id, local);
+        Some(id)
+    }
+
+    /// Client: the connection request drew an ICMP "port unreachable".
+    pub fn handle_request_refused(&mut self, now: Now) {
+        let limits = self.limits;
+        let Kind::Client(c) = &mut self.kind else {
+            return;
+        };
+        if c.failed(now.mono, Failure::Unreachable, &limits) {
+            let server = c.server_text();
+            self.notice(
+                Severity::Warning,
+                format!(
+                    "no VRPN server at {server}: its UDP port answered 'port unreachable'; \
+                     will keep retrying"
+                ),
+            );
+        }
+    }
+
+    // ------------------------------------------------------------------ TCP
+
+    /// A TCP connect the session asked for completed.
+    pub fn handle_connected(&mut self, now: Now, peer: PeerId, local: SocketAddrV4) {
+        if self
+            .peer(peer)
+            .is_some_and(|p| p.phase == Phase::Connecting)
+        {
+            self.start_greeting(now, peer, local);
+        }
+    }
+
+    /// A TCP connect the session asked for failed.
+    pub fn handle_connect_failed(&mut self, now: Now, peer: PeerId, error: &std::io::Error) {
+        let Some(p) = self.peer(peer) else {
+            return;
+        };
+        let who = p.label.clone();
+        let failure = if error.kind() == std::io::ErrorKind::ConnectionRefused {
+            Failure::Refused
+        } else {
+            Failure::Other(error.to_string())
+        };
+        let text = match &self.kind {
+            Kind::Client(_) => match &failure {
+                Failure::Refused => format!(
+                    "no VRPN server is listening on {who} (connection refused); will keep \
+                     retrying every {:?}",
+                    self.limits.retry_interval
+                ),
+                _ => format!("cannot connect to {who}: {error}; will keep retrying"),
+            },
+            _ => format!(
+                "cannot call back client at {who}: {error} (a firewall on the client may block \
+                 the call-back; the client can use the tcp:// name form)"
+            ),
+        };
+        self.drop_peer(now, peer, text, Some(failure));
+    }
+
+    /// Where the next bytes read from `peer`'s TCP socket go (empty: read nothing now).
+    pub fn rx_spare(&mut self, peer: PeerId) -> &mut [u8] {
+        match self.peer_mut(peer) {
+            Some(p) => p.rx_spare(),
+            None => &mut [],
+        }
+    }
+
+    /// `n` bytes were read into [`rx_spare`](Self::rx_spare).
+    pub fn handle_tcp_data(&mut self, _now: Now, peer: PeerId, n: usize) {
+        if let Some(p) = self.peer_mut(peer) {
+            p.rx_commit(n);
+        }
+    }
+
+    /// Copies bytes read from `peer` into the session; returns how many it took (it takes no
+    /// more than it can buffer: feed the rest after draining deliveries).
+    pub fn handle_tcp(&mut self, now: Now, peer: PeerId, bytes: &[u8]) -> usize {
+        let spare = self.rx_spare(peer);
+        let n = spare.len().min(bytes.len());
+        spare[..n].copy_from_slice(&bytes[..n]);
+        self.handle_tcp_data(now, peer, n);
+        n
+    }
+
+    /// The peer closed its TCP connection (`None`) or the socket failed.
+    pub fn handle_closed(&mut self, now: Now, peer: PeerId, error: Option<&std::io::Error>) {
+        let Some(p) = self.peer(peer) else {
+            return;
+        };
+        let who = p.label.clone();
+        let greeting = p.phase != Phase::Connected;
+        let (text, failure) = match error {
+            None => (
+                format!("{who} closed the connection"),
+                Failure::ClosedEarly("closed the connection".into()),
+            ),
+            Some(e) => (
+                format!("connection to {who} failed: {e}"),
+                Failure::ClosedEarly(e.to_string()),
+            ),
+        };
+        let text = if greeting && matches!(self.kind, Kind::Client(_)) {
+            format!(
+                "{who} accepted the connection and closed it before the VRPN greeting: is a \
+                 VRPN server listening on that port? (will keep retrying every {:?})",
+                self.limits.retry_interval
+            )
+        } else {
+            text
+        };
+        self.drop_peer(now, peer, text, Some(failure));
+    }
+
+    /// Sending to `peer` failed.
+    pub fn handle_send_failed(&mut self, now: Now, peer: PeerId, error: &std::io::Error) {
+        let Some(p) = self.peer(peer) else {
+            return;
+        };
+        let text = format!("sending to {} failed: {error}", p.label);
+        self.drop_peer(now, peer, text, Some(Failure::Other(error.to_string())));
+    }
+
+    /// Whether the session takes TCP bytes from `peer` now.
+    pub fn wants_tcp(&self, peer: PeerId) -> bool {
+        self.peer(peer).is_some_and(|p| {
+            p.phase != Phase::Connecting && p.budget < self.limits.max_messages_per_peer_per_loop
+        })
+    }
+
+    // ------------------------------------------------------------------ UDP
+
+    /// Our UDP socket for `peer` is bound at `port` (`None`: the bind failed; the peer is
+    /// served over TCP only).
+    pub fn handle_udp_bound(&mut self, now: Now, peer: PeerId, port: Option<u16>) {
+        if self
+            .peer(peer)
+            .is_some_and(|p| p.phase == Phase::Describing)
+        {
+            self.finish_handshake(now, peer, port);
+        }
+    }
+
+    /// The outbound UDP socket to `peer`'s announced address opened (or not).
+    pub fn handle_udp_out(&mut self, _now: Now, peer: PeerId, ok: bool) {
+        if let Some(p) = self.peer_mut(peer) {
+            p.udp_ready = ok;
+        }
+    }
+
+    /// Where datagrams received for `peer` go, when the session can take more now.
+    pub fn udp_inbox(&mut self, peer: PeerId) -> Option<&mut DatagramInbox> {
+        let budget = self.limits.max_messages_per_peer_per_loop;
+        let p = self.peer_mut(peer)?;
+        if p.phase != Phase::Connected || p.budget >= budget {
+            return None;
+        }
+        p.udp_rx.as_mut().filter(|i| i.is_drained())
+    }
+
+    /// Whether [`udp_inbox`](Self::udp_inbox) would take datagrams now.
+    pub fn wants_udp(&self, peer: PeerId) -> bool {
+        self.peer(peer).is_some_and(|p| {
+            p.phase == Phase::Connected
+                && p.budget < self.limits.max_messages_per_peer_per_loop
+                && p.udp_rx.as_ref().is_some_and(DatagramInbox::is_drained)
+        })
+    }
+
+    /// `count` datagrams were received into [`udp_inbox`](Self::udp_inbox).
+    pub fn handle_datagrams(&mut self, _now: Now, peer: PeerId, count: usize) {
+        if let Some(inbox) = self.peer_mut(peer).and_then(|p| p.udp_rx.as_mut()) {
+            inbox.filled(count);
+        }
+    }
+}

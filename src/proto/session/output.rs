@@ -1,0 +1,195 @@
+//! What the session asks of the shell: I/O requests, bytes and datagrams to send, the next
+//! deadline and the work due at it (time-outs, connection attempts, replay pacing).
+
+use std::net::SocketAddrV4;
+use std::time::Instant;
+
+use super::{Kind, Session};
+use crate::proto::client::Failure;
+use crate::proto::endpoint::Phase;
+use crate::proto::{IoRequest, PeerId, Severity};
+use crate::time::Now;
+
+impl Session {
+    // ------------------------------------------------------------------ output
+
+    /// The next thing the shell must do.
+    pub fn poll_io(&mut self) -> Option<IoRequest> {
+        self.io.pop_front()
+    }
+
+    /// The text of a connection request (`IP PORT` and a NUL).
+    pub fn request_text(&self) -> &[u8] {
+        &self.request[..self.request_len]
+    }
+
+    /// Reliable bytes waiting for `peer`.
+    pub fn tcp_pending(&self, peer: PeerId) -> &[u8] {
+        match self.peer(peer) {
+            Some(p) if p.phase != Phase::Connecting => p.tx.pending(),
+            _ => &[],
+        }
+    }
+
+    /// `n` bytes of [`tcp_pending`](Self::tcp_pending) were written.
+    pub fn tcp_sent(&mut self, peer: PeerId, n: usize) {
+        if let Some(p) = self.peer_mut(peer) {
+            p.tx.consume(n);
+        }
+    }
+
+    /// The oldest datagram waiting for `peer`. Without an outbound UDP socket, queued
+    /// datagrams are discarded (unreliable).
+    pub fn udp_front(&mut self, peer: PeerId) -> Option<&[u8]> {
+        let p = self.peer_mut(peer)?;
+        if !p.udp_ready {
+            p.udp_tx.clear();
+            return None;
+        }
+        p.udp_tx.front()
+    }
+
+    /// The datagram from [`udp_front`](Self::udp_front) went out (or was lost).
+    pub fn udp_sent(&mut self, peer: PeerId) {
+        if let Some(p) = self.peer_mut(peer) {
+            p.udp_tx.pop_front();
+        }
+    }
+
+    /// The earliest time [`handle_timeout`](Self::handle_timeout) has work to do.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        let mut d: Option<Instant> = None;
+        let mut at = |t: Instant| d = Some(d.map_or(t, |x| x.min(t)));
+        for p in self.peers.iter().flatten() {
+            if let Some(t) = p.deadline {
+                at(t);
+            }
+        }
+        match &self.kind {
+            Kind::Client(c) if self.peers.iter().flatten().next().is_none() => {
+                at(c.next_attempt);
+                if !c.tcp_only && !c.warned_no_answer {
+                    at(c.waiting_since + self.limits.no_answer_warning);
+                }
+            }
+            Kind::Server(p) => {
+                if let Some(t) = p.next_deadline() {
+                    at(t);
+                }
+            }
+            _ => {}
+        }
+        d
+    }
+
+    /// Does what is due at `now`: connect and greeting time-outs, the client's next attempt
+    /// and its "no answer" explanation, the server's request summary, the replay clock.
+    pub fn handle_timeout(&mut self, now: Now) {
+        for slot in 0..self.peers.len() {
+            let Some(p) = self.peers[slot].as_ref() else {
+                continue;
+            };
+            if !p.deadline.is_some_and(|d| now.mono >= d) {
+                continue;
+            }
+            let (id, who, phase) = (p.id, p.label.clone(), p.phase);
+            let is_client = matches!(self.kind, Kind::Client(_));
+            let (text, failure) = match phase {
+                Phase::Connecting => (
+                    format!("TCP connection to {who} timed out"),
+                    Failure::ConnectTimeout,
+                ),
+                _ if is_client => (
+                    format!(
+                        "{who} accepted the connection but sent no VRPN greeting within {:?}: \
+                         is a VRPN server (and not another program) listening there? (will keep \
+                         retrying every {:?})",
+                        self.limits.handshake_timeout, self.limits.retry_interval
+                    ),
+                    Failure::Silent,
+                ),
+                _ => (
+                    format!(
+                        "dropped {who}: no VRPN greeting within {:?} \
+                         (Limits::handshake_timeout)",
+                        self.limits.handshake_timeout
+                    ),
+                    Failure::Silent,
+                ),
+            };
+            self.drop_peer(now, id, text, Some(failure));
+        }
+        let limits = self.limits;
+        let idle = self.peers.iter().flatten().next().is_none();
+        match &mut self.kind {
+            Kind::Client(c) if idle => {
+                let explain = c.no_answer_due(now.mono, &limits).then(|| {
+                    let listen = c.listen.map_or_else(|| "?".to_string(), |l| l.to_string());
+                    format!(
+                        "no answer from the VRPN server at {host}:{port} after {wait:?}: \
+                         either no server runs there, or it cannot connect back to this \
+                         machine at {listen} (a firewall or NAT). If the server runs, use \
+                         DEVICE@tcp://{host}:{port} to connect over TCP only",
+                        host = c.host,
+                        port = c.server.port(),
+                        wait = limits.no_answer_warning
+                    )
+                });
+                let due = now.mono >= c.next_attempt;
+                if let Some(text) = explain {
+                    self.notice(Severity::Warning, text);
+                }
+                if due {
+                    self.attempt(now);
+                }
+            }
+            Kind::Server(_) => self.request_summary(now.mono),
+            Kind::Client(_) | Kind::File(_) | Kind::Loopback => {}
+        }
+    }
+
+    /// Client: starts a connection attempt.
+    fn attempt(&mut self, now: Now) {
+        let limits = self.limits;
+        let Kind::Client(c) = &mut self.kind else {
+            return;
+        };
+        c.attempted(now.mono, &limits);
+        let server = c.server;
+        if c.tcp_only {
+            let id = self.alloc_peer(true, server);
+            if let Some(p) = self.peer_mut(id) {
+                p.deadline = Some(now.mono + limits.connect_timeout);
+            }
+            self.io.push_back(IoRequest::Connect {
+                peer: id,
+                addr: server,
+            });
+        } else {
+            self.io.push_back(IoRequest::SendRequest { to: server });
+        }
+    }
+
+    /// Client: a connection request could not be sent.
+    pub fn report_request_error(&mut self, now: Now, to: SocketAddrV4, error: &std::io::Error) {
+        let limits = self.limits;
+        let Kind::Client(c) = &mut self.kind else {
+            return;
+        };
+        if c.failed(now.mono, Failure::Other(error.to_string()), &limits) {
+            let text = format!("cannot send a connection request to {to}: {error}");
+            self.notice(Severity::Warning, text);
+        }
+    }
+
+    /// Starts a new loop pass at `now`: every peer gets its full message budget again, and a
+    /// replay's clock advances (C++ model: each pass plays what became due since the last).
+    pub fn begin_pass(&mut self, now: Now) {
+        for p in self.peers.iter_mut().flatten() {
+            p.budget = 0;
+        }
+        if let Kind::File(r) = &mut self.kind {
+            r.tick(now.mono);
+        }
+    }
+}
