@@ -611,10 +611,7 @@ impl Pair {
     fn drain(&mut self, who: Who) -> bool {
         let now = self.now;
         let mut busy = false;
-        loop {
-            let Some(d) = self.side(who).session.poll_delivery(now) else {
-                break;
-            };
+        while let Some(d) = self.side(who).session.poll_delivery(now) {
             busy = true;
             match d {
                 Delivery::Message {
@@ -696,10 +693,7 @@ impl Pair {
             Who::Client => Who::Server,
             Who::Server => Who::Client,
         };
-        loop {
-            let Some(dg) = self.side(who).session.udp_front(peer).map(<[u8]>::to_vec) else {
-                break;
-            };
+        while let Some(dg) = self.side(who).session.udp_front(peer).map(<[u8]>::to_vec) {
             self.side(who).session.udp_sent(peer);
             busy = true;
             if !self.side(who).udp_out {
