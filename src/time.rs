@@ -21,6 +21,21 @@ pub struct Now {
     pub wall: TimeVal,
 }
 
+/// Where a time comes from, for calls that need it only on some paths: a [`Now`] gives itself
+/// (tests, virtual time); the shell's per-pass clock reads the system clocks the first time it
+/// is asked and then answers the same reading for the rest of the pass, so a loop pass that
+/// only moves messages reads no clock at all.
+pub trait TimeSource {
+    /// The time.
+    fn now(&self) -> Now;
+}
+
+impl TimeSource for Now {
+    fn now(&self) -> Now {
+        *self
+    }
+}
+
 impl Now {
     /// Both clocks, read now. Only the I/O shell and the programs call this; everything else is
     /// handed a `Now`.

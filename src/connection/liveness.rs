@@ -9,7 +9,7 @@ use std::time::Instant;
 use super::dispatch::{SenderId, TypeId};
 use super::{Connection, ConnectionEvent, ConnectionState, Notice, Severity};
 use crate::proto::ping::{PingAction, PingCycle, BACK_TEXT, ERROR_TEXT, WARN_TEXT};
-use crate::time::Now;
+use crate::time::{Now, TimeSource};
 use crate::wire::class;
 use crate::wire::payload::text::TextSeverity;
 
@@ -29,6 +29,7 @@ pub(crate) struct Liveness {
 impl Liveness {
     /// A pong from the device arrived: ends the cycle, and a flatline with a text.
     pub(crate) fn pong(&self, conn: &Connection, time: crate::time::TimeVal) {
+        conn.liveness_changed();
         let back = self.cycle.borrow_mut().on_pong(time);
         if back {
             let _ = conn.send_text(self.sender, TextSeverity::Error, 0, BACK_TEXT);
@@ -40,6 +41,18 @@ impl Connection {
     /// Runs `l` from this connection's loop while `l` exists.
     pub(crate) fn watch_liveness(&self, l: &Rc<Liveness>) {
         self.inner.liveness.borrow_mut().push(Rc::downgrade(l));
+        self.liveness_changed();
+    }
+
+    /// Some cycle may have changed: its deadline is worked out again when next asked.
+    pub(crate) fn liveness_changed(&self) {
+        self.inner.liveness_next.set(None);
+    }
+
+    /// A remote's cycle started (its first `mainloop()`): poll it on this pass.
+    pub(crate) fn liveness_start(&self) {
+        self.inner.liveness_started.set(true);
+        self.liveness_changed();
     }
 
     /// The cycles still alive (dead ones are forgotten on the way).
@@ -58,11 +71,21 @@ impl Connection {
         })
     }
 
-    pub(super) fn run_liveness(&self, now: Now) {
-        if self.inner.liveness.borrow().is_empty() || self.is_replay() {
+    pub(super) fn run_liveness(&self, clock: &dyn TimeSource) {
+        // Nothing is due unless some started cycle waits for a pong (the common steady state
+        // is every cycle answered: then no clock is read).
+        let started = self.inner.liveness_started.get();
+        let due = self.liveness_deadline();
+        if due.is_none() && !started {
+            return;
+        }
+        let now = clock.now();
+        if !started && due.is_some_and(|d| now.mono < d) || self.is_replay() {
             return; // nobody answers pings in a log
         }
+        self.inner.liveness_started.set(false);
         let connected = self.state() == ConnectionState::Connected;
+        self.liveness_changed();
         for l in self.live_cycles() {
             if !l.started.get() {
                 continue;
@@ -85,6 +108,7 @@ impl Connection {
         if self.inner.liveness.borrow().is_empty() {
             return;
         }
+        self.liveness_changed();
         for l in self.live_cycles() {
             let mut c = l.cycle.borrow_mut();
             match ev {
@@ -96,12 +120,18 @@ impl Connection {
     }
 
     pub(super) fn liveness_deadline(&self) -> Option<Instant> {
+        if let Some(known) = self.inner.liveness_next.get() {
+            return known;
+        }
         let list = self.inner.liveness.borrow();
-        list.iter()
+        let next = list
+            .iter()
             .filter_map(|w| w.upgrade())
             .filter(|l| l.started.get())
             .filter_map(|l| l.cycle.borrow().next_deadline())
-            .min()
+            .min();
+        self.inner.liveness_next.set(Some(next));
+        next
     }
 
     /// A server finished describing its devices: say so at once if a remote asks for a device

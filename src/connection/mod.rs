@@ -31,9 +31,9 @@ use std::time::{Duration, Instant};
 use crate::error::Error;
 use crate::name::{DeviceName, Location};
 use crate::net::shell::Shell;
-use crate::net::Reactor;
+use crate::net::{PassClock, Reactor};
 use crate::proto::{Delivery, Session};
-use crate::time::{Now, TimeVal};
+use crate::time::{Now, TimeSource, TimeVal};
 use crate::wire;
 use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
@@ -54,11 +54,14 @@ struct Core {
 
 struct Inner {
     core: RefCell<Core>,
+    /// The reactor the sockets wait in (kept here so a pass need not borrow the core for it).
+    reactor: Option<Reactor>,
     handlers: HandlerTable,
     /// How many handler calls are running (a handler may cause nested deliveries).
     depth: Cell<u32>,
-    /// The time of the pass that is delivering, so handlers that stamp replies agree with it.
-    pass_now: Cell<Option<Now>>,
+    /// The clock of the running pass: read at most once per pass, and only if something
+    /// needs the time; handlers that stamp replies share the pass's reading.
+    clock: PassClock,
     /// Local deliveries requested while a handler runs: encoded messages, delivered in order.
     deferred: RefCell<Vec<u8>>,
     deferred_scratch: RefCell<Vec<u8>>,
@@ -67,6 +70,12 @@ struct Inner {
     states: CallbackList<ConnectionState>,
     /// The liveness cycles of the remotes on this connection.
     liveness: RefCell<Vec<Weak<Liveness>>>,
+    /// The earliest liveness deadline, while known (`None` inside: no deadline). Cleared
+    /// whenever a cycle may have changed (a pong, an event, a ping sent, a remote started).
+    liveness_next: Cell<Option<Option<Instant>>>,
+    /// A remote started its cycle and the connection has not polled it yet (a fresh cycle
+    /// has no deadline until its first poll).
+    liveness_started: Cell<bool>,
     /// Senders whose texts the default printer shows.
     printed: RefCell<Vec<i32>>,
 }
@@ -119,16 +128,19 @@ impl Connection {
     fn from_parts(session: Session, shell: Shell) -> Connection {
         Connection {
             inner: Rc::new(Inner {
+                reactor: shell.reactor().cloned(),
                 core: RefCell::new(Core { session, shell }),
                 handlers: HandlerTable::default(),
                 depth: Cell::new(0),
-                pass_now: Cell::new(None),
+                clock: PassClock::default(),
                 deferred: RefCell::new(Vec::with_capacity(64 * 1024)),
                 deferred_scratch: RefCell::new(Vec::with_capacity(64 * 1024)),
                 notices: CallbackList::default(),
                 peer_senders: CallbackList::default(),
                 states: CallbackList::default(),
                 liveness: RefCell::new(Vec::new()),
+                liveness_next: Cell::new(Some(None)),
+                liveness_started: Cell::new(false),
                 printed: RefCell::new(Vec::new()),
             }),
         }
@@ -286,13 +298,13 @@ impl Connection {
 
     /// The reactor this connection's sockets wait in (none for loopback and replay).
     pub fn reactor(&self) -> Option<Reactor> {
-        self.inner.core.borrow().shell.reactor().cloned()
+        self.inner.reactor.clone()
     }
 
     /// The current time: the time of the running pass while handlers run (so every reply a
     /// pass sends carries the same time), the clock otherwise.
     pub fn now(&self) -> Now {
-        self.inner.pass_now.get().unwrap_or_else(crate::net::clock)
+        self.inner.clock.now()
     }
 
     // -------------------------------------------------------------- names
@@ -420,8 +432,7 @@ impl Connection {
                     .pack(time, sender.0, type_id.0, payload, class_of_service);
             if overflowed {
                 // Rare: a peer is not reading. Only now is the time needed (for the drop).
-                let now = self.inner.pass_now.get().unwrap_or_else(crate::net::clock);
-                core.session.drop_backlogged(now);
+                core.session.drop_backlogged(self.inner.clock.now());
             }
         }
         if self.inner.handlers.has_handlers(type_id) {
@@ -524,57 +535,100 @@ impl Connection {
         if self.inner.depth.get() > 0 {
             return Ok(());
         }
-        if let Some(r) = self.reactor() {
+        if let Some(r) = &self.inner.reactor {
             r.poll_now().map_err(|e| Error::io("polling sockets", e))?;
         }
-        let now = crate::net::clock();
-        self.inner.pass_now.set(Some(now));
+        let clock = &self.inner.clock;
+        let outer = clock.begin();
         {
             let mut core = self.inner.core.borrow_mut();
             let Core { session, shell } = &mut *core;
-            shell.service(now, session);
-            if session.poll_timeout().is_some_and(|t| now.mono >= t) {
-                session.handle_timeout(now);
-                shell.carry_out(now, session);
+            shell.service(clock, session);
+            if session
+                .poll_timeout()
+                .is_some_and(|t| clock.now().mono >= t)
+            {
+                session.handle_timeout(clock.now());
             }
-            session.begin_pass(now);
+            if session.has_io() {
+                shell.carry_out(clock, session);
+            }
+            session.begin_pass(clock);
         }
-        self.pump(now);
-        self.run_liveness(now);
+        self.pump(clock);
+        self.run_liveness(clock);
         {
             let mut core = self.inner.core.borrow_mut();
             let Core { session, shell } = &mut *core;
-            shell.flush(now, session);
+            shell.flush(clock, session);
             session.flush_logs_some(LOG_FLUSH_PER_PASS);
         }
         // Deliveries queued by the flush (a peer that failed on write).
-        self.pump(now);
-        self.inner.pass_now.set(None);
+        if self.inner.core.borrow().session.has_deliveries() {
+            self.pump(clock);
+        }
+        if outer {
+            clock.end();
+        }
         Ok(())
     }
 
     /// Takes deliveries from the session and hands them to handlers, reading more from the
     /// sockets whenever the session runs dry, until nothing more arrives.
-    fn pump(&self, now: Now) {
+    fn pump(&self, clock: &dyn TimeSource) {
         loop {
-            let next = self.inner.core.borrow_mut().session.poll_delivery(now);
-            let Some(d) = next else {
+            // One borrow of the core per delivery: poll, carry out I/O requests, read more.
+            let (d, scratch) = {
                 let mut core = self.inner.core.borrow_mut();
                 let Core { session, shell } = &mut *core;
-                shell.carry_out(now, session);
-                if shell.read(now, session) {
-                    continue;
-                }
-                if session.has_deliveries() {
-                    continue;
-                }
-                break;
+                let d = loop {
+                    if let Some(d) = session.poll_delivery(clock) {
+                        break Some(d);
+                    }
+                    if session.has_io() {
+                        shell.carry_out(clock, session);
+                    }
+                    if shell.read(clock, session) || session.has_deliveries() {
+                        continue;
+                    }
+                    break None;
+                };
+                let scratch = match d {
+                    Some(Delivery::Message { .. }) => Some(session.take_scratch()),
+                    _ => None,
+                };
+                (d, scratch)
             };
-            self.dispatch_delivery(now, d);
+            match (d, scratch) {
+                (None, _) => break,
+                (
+                    Some(Delivery::Message {
+                        time,
+                        sender,
+                        type_id,
+                        len,
+                    }),
+                    Some(scratch),
+                ) => {
+                    self.deliver(&Message {
+                        time,
+                        sender: SenderId(sender),
+                        type_id: TypeId(type_id),
+                        payload: &scratch[..len],
+                        conn: self,
+                    });
+                    self.inner
+                        .core
+                        .borrow_mut()
+                        .session
+                        .restore_scratch(scratch);
+                }
+                (Some(d), _) => self.dispatch_delivery(clock, d),
+            }
         }
     }
 
-    fn dispatch_delivery(&self, now: Now, d: Delivery) {
+    fn dispatch_delivery(&self, clock: &dyn TimeSource, d: Delivery) {
         match d {
             Delivery::Message {
                 time,
@@ -597,6 +651,7 @@ impl Connection {
                     .restore_scratch(scratch);
             }
             Delivery::Event(ev) => {
+                let now = clock.now();
                 self.liveness_event(now, ev);
                 self.deliver(&Message {
                     time: now.wall,

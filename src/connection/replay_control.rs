@@ -30,14 +30,11 @@ impl Connection {
     /// Delivers what the replay has due now (controls called from anywhere, handlers
     /// included: nesting is counted, so a control inside a handler is safe).
     fn play_due(&self) {
-        let now = self.now();
-        let outer = self.inner.pass_now.get().is_none();
+        let clock = &self.inner.clock;
+        let outer = clock.begin();
+        self.pump(clock);
         if outer {
-            self.inner.pass_now.set(Some(now));
-        }
-        self.pump(now);
-        if outer {
-            self.inner.pass_now.set(None);
+            clock.end();
         }
     }
 
@@ -45,7 +42,7 @@ impl Connection {
     fn skip_due(&self) {
         let now = self.now();
         loop {
-            let d = self.inner.core.borrow_mut().session.poll_delivery(now);
+            let d = self.inner.core.borrow_mut().session.poll_delivery(&now);
             match d {
                 None => break,
                 Some(Delivery::Message { .. }) => {}

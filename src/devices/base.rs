@@ -110,11 +110,6 @@ impl PingCycle {
         PingCycle { state }
     }
 
-    /// Starts the cycle (a remote's first `mainloop()`; later calls change nothing).
-    pub fn start(&self) {
-        self.state.started.set(true);
-    }
-
     /// True while a ping waits for its pong.
     pub fn waiting_for_pong(&self) -> bool {
         self.state.cycle.borrow().waiting_for_pong()
@@ -219,7 +214,9 @@ impl RemoteCore {
     /// Services the connection: every device on it. The first call also starts this
     /// device's ping cycle (as in C++), which the connection keeps running from then on.
     pub fn mainloop(&self) -> Result<(), Error> {
-        self.ping.start();
+        if !self.ping.state.started.replace(true) {
+            self.conn.liveness_start();
+        }
         self.conn.mainloop()
     }
 

@@ -14,10 +14,54 @@ mod sys;
 
 pub use reactor::{Reactor, Ready};
 
-use crate::time::Now;
+use std::cell::Cell;
+
+use crate::time::{Now, TimeSource};
 
 /// Reads both clocks: the only clock reading in the library (the programs read their own).
 #[inline]
 pub(crate) fn clock() -> Now {
     Now::read()
+}
+
+/// The clock of one loop pass: read the first time something in the pass needs the time, then
+/// the same reading until the pass ends. A pass that only moves messages reads no clock.
+#[derive(Debug, Default)]
+pub(crate) struct PassClock {
+    in_pass: Cell<bool>,
+    now: Cell<Option<Now>>,
+}
+
+impl PassClock {
+    /// Starts a pass (forgets the last reading). Returns false when a pass is already running
+    /// (a nested call), which then shares the outer pass's time.
+    pub(crate) fn begin(&self) -> bool {
+        if self.in_pass.replace(true) {
+            return false;
+        }
+        self.now.set(None);
+        true
+    }
+
+    /// Ends the pass begun by the matching [`begin`](Self::begin) that returned true.
+    pub(crate) fn end(&self) {
+        self.in_pass.set(false);
+        self.now.set(None);
+    }
+}
+
+impl TimeSource for PassClock {
+    fn now(&self) -> Now {
+        if !self.in_pass.get() {
+            return clock();
+        }
+        match self.now.get() {
+            Some(n) => n,
+            None => {
+                let n = clock();
+                self.now.set(Some(n));
+                n
+            }
+        }
+    }
 }

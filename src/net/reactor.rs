@@ -41,6 +41,8 @@ pub struct Ready {
 #[derive(Default)]
 struct Slot {
     used: bool,
+    /// The owner wants the wake time of readable events (serial ports: first-byte time).
+    timed: bool,
     ready: Ready,
 }
 
@@ -52,6 +54,11 @@ struct Inner {
     free: Vec<usize>,
     /// Data arrived since the last [`Reactor::take_activity`].
     activity: bool,
+    /// Counts polls that brought events: an owner that saw the same count last time has
+    /// nothing new to take.
+    epoch: u64,
+    /// Registrations that want wake times (when none, a poll never reads the clock).
+    timed: usize,
 }
 
 /// A shared poll: see the module documentation.
@@ -76,6 +83,7 @@ impl Reactor {
         let mut slots = Vec::with_capacity(64);
         slots.push(Slot {
             used: true,
+            timed: false,
             ready: Ready::default(),
         });
         Ok(Reactor {
@@ -86,6 +94,8 @@ impl Reactor {
                 slots,
                 free: Vec::new(),
                 activity: false,
+                epoch: 0,
+                timed: 0,
             })),
         })
     }
@@ -105,6 +115,7 @@ impl Reactor {
         };
         inner.slots[i] = Slot {
             used: true,
+            timed: false,
             ready: Ready::default(),
         };
         Token(i)
@@ -122,9 +133,14 @@ impl Reactor {
         Ok(token)
     }
 
-    /// Registers a raw file descriptor (a serial port, an input device).
+    /// Registers a raw file descriptor (a serial port, an input device) whose readiness
+    /// carries the time the poll woke for it ([`Ready::woke`]).
     pub fn register_fd(&self, fd: std::os::fd::RawFd, interest: Interest) -> io::Result<Token> {
-        self.register(&mut mio::unix::SourceFd(&fd), interest)
+        let token = self.register(&mut mio::unix::SourceFd(&fd), interest)?;
+        let mut inner = self.inner.borrow_mut();
+        inner.slots[token.0].timed = true;
+        inner.timed += 1;
+        Ok(token)
     }
 
     /// Forgets a registration; the token may be reused.
@@ -132,9 +148,11 @@ impl Reactor {
         let mut inner = self.inner.borrow_mut();
         let _ = inner.poll.registry().deregister(source);
         if let Some(slot) = inner.slots.get_mut(token.0).filter(|s| s.used) {
+            let timed = std::mem::take(&mut slot.timed);
             slot.used = false;
             slot.ready = Ready::default();
             inner.free.push(token.0);
+            inner.timed -= usize::from(timed);
         }
     }
 
@@ -190,8 +208,18 @@ impl Reactor {
         if inner.events.is_empty() {
             return Ok(false);
         }
-        // The time the poll woke: the arrival time of whatever it woke for.
-        let woke = Now::read();
+        inner.epoch += 1;
+        // The time the poll woke, read only when a timed source (a serial port) is ready: the
+        // arrival time of its first byte. Sockets do without it.
+        let woke = (inner.timed > 0
+            && inner.events.iter().any(|ev| {
+                ev.is_readable()
+                    && inner
+                        .slots
+                        .get(ev.token().0)
+                        .is_some_and(|s| s.used && s.timed)
+            }))
+        .then(Now::read);
         let mut any = false;
         for ev in inner.events.iter() {
             if ev.token() == TIMER {
@@ -205,10 +233,11 @@ impl Reactor {
             let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
                 continue;
             };
+            let timed = slot.timed;
             let r = &mut slot.ready;
             if ev.is_readable() || ev.is_read_closed() || ev.is_error() {
-                if !r.readable {
-                    r.woke = Some(woke);
+                if !r.readable && timed {
+                    r.woke = woke;
                 }
                 r.readable = true;
             }
@@ -218,6 +247,12 @@ impl Reactor {
         }
         inner.activity |= any;
         Ok(any)
+    }
+
+    /// A number that changes whenever a poll brings events (see [`take`](Self::take): while
+    /// it stays the same, every token's readiness is unchanged).
+    pub fn epoch(&self) -> u64 {
+        self.inner.borrow().epoch
     }
 
     /// True once since the last call if data arrived (for a server's busy-poll window).

@@ -14,7 +14,7 @@ use super::sys::recv_datagrams;
 use crate::error::Error;
 use crate::proto::buffers::INBOX_SLOTS;
 use crate::proto::{IoRequest, PeerId, Session};
-use crate::time::Now;
+use crate::time::TimeSource;
 
 /// Whether a TCP read that leaves part of the buffer unfilled proves the socket empty, so the
 /// read that would only return `WouldBlock` can be skipped (one system call per pass saved).
@@ -93,6 +93,8 @@ enum Listeners {
 /// Every socket of one connection.
 pub(crate) struct Shell {
     reactor: Option<Reactor>,
+    /// The reactor's epoch when this shell last took its sockets' readiness.
+    seen_epoch: u64,
     listeners: Listeners,
     peers: Vec<Option<PeerIo>>,
     request_buf: [u8; 256],
@@ -154,6 +156,7 @@ impl Shell {
     pub(crate) fn none() -> Shell {
         Shell {
             reactor: None,
+            seen_epoch: 0,
             listeners: Listeners::None,
             peers: Vec::new(),
             request_buf: [0; 256],
@@ -182,6 +185,7 @@ impl Shell {
             .map_err(|e| Error::io("registering listeners", e))?;
         Ok(Shell {
             reactor: Some(reactor.clone()),
+            seen_epoch: 0,
             listeners: Listeners::Server {
                 tcp,
                 udp,
@@ -223,6 +227,7 @@ impl Shell {
         }
         let shell = Shell {
             reactor: Some(reactor.clone()),
+            seen_epoch: 0,
             listeners: Listeners::Client {
                 listener,
                 request: None,
@@ -264,10 +269,14 @@ impl Shell {
 
     /// Takes what the listeners and connecting sockets are ready for to the session, then
     /// carries out what the session asks.
-    pub(crate) fn service(&mut self, now: Now, session: &mut Session) {
+    pub(crate) fn service(&mut self, clock: &dyn TimeSource, session: &mut Session) {
         let Some(reactor) = self.reactor.clone() else {
             return;
         };
+        // Nothing new since the last look (no poll brought events): the sticky flags hold.
+        let epoch = reactor.epoch();
+        let fresh = epoch != self.seen_epoch;
+        self.seen_epoch = epoch;
         let Shell {
             listeners,
             peers,
@@ -276,15 +285,17 @@ impl Shell {
         } = self;
         match listeners {
             Listeners::Server { tcp, udp, .. } => {
-                tcp.refresh(&reactor);
-                udp.refresh(&reactor);
+                if fresh {
+                    tcp.refresh(&reactor);
+                    udp.refresh(&reactor);
+                }
                 for _ in 0..REQUESTS_PER_PASS {
                     if !udp.ready.readable {
                         break;
                     }
                     match udp.sock.recv_from(request_buf) {
                         Ok((n, from)) => {
-                            session.handle_request(now, v4(from), &request_buf[..n]);
+                            session.handle_request(clock.now(), v4(from), &request_buf[..n]);
                         }
                         Err(e) if would_block(&e) => udp.ready.readable = false,
                         Err(e) if interrupted(&e) => {}
@@ -298,7 +309,7 @@ impl Shell {
                     match tcp.sock.accept() {
                         Ok((stream, from)) => {
                             let local = stream.local_addr().map(v4).unwrap_or(v4(from));
-                            if let Some(id) = session.handle_accept(now, v4(from), local) {
+                            if let Some(id) = session.handle_accept(clock.now(), v4(from), local) {
                                 let _ = stream.set_nodelay(true);
                                 match Sock::register(
                                     &reactor,
@@ -306,7 +317,7 @@ impl Shell {
                                     Interest::READABLE | Interest::WRITABLE,
                                 ) {
                                     Ok(tcp) => put_peer(peers, &reactor, id, tcp, false),
-                                    Err(e) => session.handle_closed(now, id, Some(&e)),
+                                    Err(e) => session.handle_closed(clock.now(), id, Some(&e)),
                                 }
                             }
                         }
@@ -318,12 +329,16 @@ impl Shell {
             }
             Listeners::Client { listener, request } => {
                 if let Some(l) = listener.as_mut() {
-                    l.refresh(&reactor);
+                    if fresh {
+                        l.refresh(&reactor);
+                    }
                     while l.ready.readable {
                         match l.sock.accept() {
                             Ok((stream, from)) => {
                                 let local = stream.local_addr().map(v4).unwrap_or(v4(from));
-                                if let Some(id) = session.handle_callback(now, v4(from), local) {
+                                if let Some(id) =
+                                    session.handle_callback(clock.now(), v4(from), local)
+                                {
                                     let _ = stream.set_nodelay(true);
                                     match Sock::register(
                                         &reactor,
@@ -337,7 +352,7 @@ impl Shell {
                                             put_peer(peers, &reactor, id, tcp, false);
                                             break;
                                         }
-                                        Err(e) => session.handle_closed(now, id, Some(&e)),
+                                        Err(e) => session.handle_closed(clock.now(), id, Some(&e)),
                                     }
                                 }
                                 // Further call-backs while one is live are closed on drop.
@@ -349,12 +364,14 @@ impl Shell {
                     }
                 }
                 if let Some(r) = request.as_mut() {
-                    r.refresh(&reactor);
+                    if fresh {
+                        r.refresh(&reactor);
+                    }
                     if std::mem::take(&mut r.ready.readable) {
                         let mut b = [0u8; 16];
                         if let Err(e) = r.sock.recv(&mut b) {
                             if e.kind() == io::ErrorKind::ConnectionRefused {
-                                session.handle_request_refused(now);
+                                session.handle_request_refused(clock.now());
                             }
                         }
                     }
@@ -362,22 +379,28 @@ impl Shell {
             }
             Listeners::None => {}
         }
-        // Connects in progress.
+        // What the poll saw for each peer's sockets (read and flush rely on it for the rest
+        // of the pass: only a poll changes it), and connects in progress.
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_mut() else {
                 continue;
             };
+            if fresh {
+                p.tcp.refresh(&reactor);
+                if let Some(u) = p.udp_in.as_mut() {
+                    u.refresh(&reactor);
+                }
+            }
             if !p.connecting {
                 continue;
             }
-            p.tcp.refresh(&reactor);
             if !p.tcp.ready.writable {
                 continue;
             }
             let id = p.id;
             match p.tcp.sock.take_error() {
                 Ok(Some(e)) | Err(e) => {
-                    session.handle_connect_failed(now, id, &e);
+                    session.handle_connect_failed(clock.now(), id, &e);
                     continue;
                 }
                 Ok(None) => {}
@@ -391,19 +414,21 @@ impl Shell {
                         .local_addr()
                         .map(v4)
                         .unwrap_or(SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0));
-                    session.handle_connected(now, id, local);
+                    session.handle_connected(clock.now(), id, local);
                 }
                 Err(e) if e.kind() == io::ErrorKind::NotConnected => {
                     p.tcp.ready.writable = false;
                 }
-                Err(e) => session.handle_connect_failed(now, id, &e),
+                Err(e) => session.handle_connect_failed(clock.now(), id, &e),
             }
         }
-        self.carry_out(now, session);
+        if session.has_io() {
+            self.carry_out(clock, session);
+        }
     }
 
     /// Carries out every request the session has queued, reporting each outcome.
-    pub(crate) fn carry_out(&mut self, now: Now, session: &mut Session) {
+    pub(crate) fn carry_out(&mut self, clock: &dyn TimeSource, session: &mut Session) {
         while let Some(req) = session.poll_io() {
             let Some(reactor) = self.reactor.clone() else {
                 // No sockets here (loopback, replay): nothing to connect or bind.
@@ -420,7 +445,7 @@ impl Shell {
                             tcp.ready.writable = false;
                             put_peer(&mut self.peers, &reactor, peer, tcp, true);
                         }
-                        Err(e) => session.handle_connect_failed(now, peer, &e),
+                        Err(e) => session.handle_connect_failed(clock.now(), peer, &e),
                     }
                 }
                 IoRequest::BindUdp { peer } => {
@@ -437,10 +462,10 @@ impl Shell {
                     match (bound, self.peer_io(peer)) {
                         (Ok((sock, port)), Some(p)) => {
                             p.udp_in = Some(sock);
-                            session.handle_udp_bound(now, peer, Some(port));
+                            session.handle_udp_bound(clock.now(), peer, Some(port));
                         }
                         (Ok((sock, _)), None) => sock.close(&reactor),
-                        (Err(_), _) => session.handle_udp_bound(now, peer, None),
+                        (Err(_), _) => session.handle_udp_bound(clock.now(), peer, None),
                     }
                 }
                 IoRequest::OpenUdpOut { peer, addr } => {
@@ -456,7 +481,7 @@ impl Shell {
                         }
                         _ => false,
                     };
-                    session.handle_udp_out(now, peer, ok);
+                    session.handle_udp_out(clock.now(), peer, ok);
                 }
                 IoRequest::Close { peer } => {
                     if let Some(io) = self
@@ -488,7 +513,7 @@ impl Shell {
                             s.ready.readable = false;
                             *request = Some(s);
                         }
-                        Err(e) => session.report_request_error(now, to, &e),
+                        Err(e) => session.report_request_error(clock.now(), to, &e),
                     }
                 }
             }
@@ -498,10 +523,7 @@ impl Shell {
     // ------------------------------------------------------------------ bytes
 
     /// Reads once from every socket whose peer wants input. Returns whether bytes came.
-    pub(crate) fn read(&mut self, now: Now, session: &mut Session) -> bool {
-        let Some(reactor) = self.reactor.clone() else {
-            return false;
-        };
+    pub(crate) fn read(&mut self, clock: &dyn TimeSource, session: &mut Session) -> bool {
         let mut got = false;
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_mut() else {
@@ -511,18 +533,17 @@ impl Shell {
                 continue;
             }
             let id = p.id;
-            p.tcp.refresh(&reactor);
-            if p.tcp.ready.readable && session.wants_tcp(id) {
+            if p.tcp.ready.readable {
                 let spare = session.rx_spare(id);
                 let spare_len = spare.len();
                 if spare_len > 0 {
                     match p.tcp.sock.read(spare) {
                         Ok(0) => {
-                            session.handle_closed(now, id, None);
+                            session.handle_closed(clock.now(), id, None);
                             continue;
                         }
                         Ok(n) => {
-                            session.handle_tcp_data(now, id, n);
+                            session.handle_tcp_data(id, n);
                             got = true;
                             if SHORT_READ_DRAINS && n < spare_len && !p.tcp.ready.read_closed {
                                 p.tcp.ready.readable = false;
@@ -531,7 +552,7 @@ impl Shell {
                         Err(e) if would_block(&e) => p.tcp.ready.readable = false,
                         Err(e) if interrupted(&e) => {}
                         Err(e) => {
-                            session.handle_closed(now, id, Some(&e));
+                            session.handle_closed(clock.now(), id, Some(&e));
                             continue;
                         }
                     }
@@ -540,7 +561,6 @@ impl Shell {
             let Some(u) = p.udp_in.as_mut() else {
                 continue;
             };
-            u.refresh(&reactor);
             if !u.ready.readable {
                 continue;
             }
@@ -549,7 +569,7 @@ impl Shell {
             };
             match recv_datagrams(&u.sock, inbox) {
                 Ok(n) => {
-                    session.handle_datagrams(now, id, n);
+                    session.handle_datagrams(id, n);
                     got = true;
                     // A short batch proves the queue empty (edge-triggered epoll raises a new
                     // event for the next arrival): no WouldBlock call needed.
@@ -562,16 +582,15 @@ impl Shell {
             }
         }
         if got {
-            reactor.note_activity();
+            if let Some(r) = &self.reactor {
+                r.note_activity();
+            }
         }
         got
     }
 
     /// Writes what the session queued, as far as the sockets take it.
-    pub(crate) fn flush(&mut self, now: Now, session: &mut Session) {
-        let Some(reactor) = self.reactor.clone() else {
-            return;
-        };
+    pub(crate) fn flush(&mut self, clock: &dyn TimeSource, session: &mut Session) {
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_mut() else {
                 continue;
@@ -580,11 +599,9 @@ impl Shell {
                 continue;
             }
             let id = p.id;
-            // After a WouldBlock, wait for the writable event instead of retrying every pass
-            // (a stalled peer would otherwise cost a failing write per pass).
-            if !p.tcp.ready.writable {
-                p.tcp.refresh(&reactor);
-            }
+            // After a WouldBlock, wait for the writable event (taken from the poll at the start
+            // of the pass) instead of retrying every pass: a stalled peer would otherwise cost
+            // a failing write per pass.
             let mut failed = None;
             while p.tcp.ready.writable {
                 let pending = session.tcp_pending(id);
@@ -603,7 +620,7 @@ impl Shell {
                 }
             }
             if let Some(e) = failed {
-                session.handle_send_failed(now, id, &e);
+                session.handle_send_failed(clock.now(), id, &e);
                 continue;
             }
             match &p.udp_out {
@@ -623,7 +640,9 @@ impl Shell {
                 }
             }
         }
-        self.carry_out(now, session);
+        if session.has_io() {
+            self.carry_out(clock, session);
+        }
     }
 }
 

@@ -4,7 +4,7 @@
 
 use std::net::{Ipv4Addr, SocketAddrV4};
 
-use crate::wire::header::{encode_message, Header};
+use crate::wire::header::{encode_message, Header, HEADER_LEN};
 use crate::wire::{MAX_UDP_DATAGRAM, MAX_UDP_INBOUND};
 
 /// Bytes waiting to go out on TCP. Grows only under backlog, up to `limit`.
@@ -47,20 +47,28 @@ impl TxBuffer {
     }
 
     pub(crate) fn push_raw(&mut self, bytes: &[u8]) -> Result<(), Backlogged> {
-        let at = self.reserve(bytes.len())?;
-        self.buf[at..at + bytes.len()].copy_from_slice(bytes);
+        self.make_room(bytes.len())?;
+        self.buf.extend_from_slice(bytes);
         Ok(())
     }
 
+    /// Appends header, payload and zero padding (copied straight in: no zero-fill first).
     pub(crate) fn push_message(&mut self, h: &Header, payload: &[u8]) -> Result<(), Backlogged> {
         let size = h.wire_size();
-        let at = self.reserve(size)?;
-        encode_message(&mut self.buf[at..at + size], h, payload);
+        self.make_room(size)?;
+        let mut header = [0u8; HEADER_LEN];
+        h.encode(&mut header);
+        self.buf.extend_from_slice(&header);
+        self.buf.extend_from_slice(payload);
+        const ZEROS: [u8; 8] = [0; 8];
+        self.buf
+            .extend_from_slice(&ZEROS[..size - HEADER_LEN - payload.len()]);
         Ok(())
     }
 
-    /// Makes room for `n` more bytes at the end and returns where they start.
-    fn reserve(&mut self, n: usize) -> Result<usize, Backlogged> {
+    /// Checks the limit for `n` more bytes and moves unsent bytes to the front when that
+    /// avoids growing the buffer.
+    fn make_room(&mut self, n: usize) -> Result<(), Backlogged> {
         let pending = self.pending_len();
         if pending + n > self.limit {
             return Err(Backlogged { pending });
@@ -70,9 +78,7 @@ impl TxBuffer {
             self.buf.truncate(pending);
             self.sent = 0;
         }
-        let at = self.buf.len();
-        self.buf.resize(at + n, 0);
-        Ok(at)
+        Ok(())
     }
 }
 

@@ -305,7 +305,7 @@ impl Pair {
                 if s.poll_timeout().is_some_and(|t| t <= now.mono) {
                     s.handle_timeout(now);
                 }
-                s.begin_pass(now);
+                s.begin_pass(&now);
                 busy |= self.carry_out(who);
             }
             busy |= self.deliver_link();
@@ -515,7 +515,7 @@ impl Pair {
                 inbox.buf[..n].copy_from_slice(&bytes[..n]);
                 inbox.lens[0] = n;
                 inbox.from[0] = from;
-                side.session.handle_datagrams(now, peer, 1);
+                side.session.handle_datagrams(peer, 1);
                 self.datagrams_delivered += 1;
             } else {
                 // The receiver cannot take it yet: it waits in the socket buffer.
@@ -570,7 +570,7 @@ impl Pair {
             if !session.wants_tcp(peer) {
                 break;
             }
-            let took = session.handle_tcp(now, peer, &bytes[..len]);
+            let took = session.handle_tcp(peer, &bytes[..len]);
             if took == 0 {
                 break;
             }
@@ -611,7 +611,7 @@ impl Pair {
     fn drain(&mut self, who: Who) -> bool {
         let now = self.now;
         let mut busy = false;
-        while let Some(d) = self.side(who).session.poll_delivery(now) {
+        while let Some(d) = self.side(who).session.poll_delivery(&now) {
             busy = true;
             match d {
                 Delivery::Message {
@@ -748,7 +748,7 @@ impl Pair {
         let now = self.now;
         let from = SocketAddrV4::new(Ipv4Addr::new(10, 0, 0, 9), 40009);
         let id = self.server.session.handle_accept(now, from, SERVER)?;
-        let took = self.server.session.handle_tcp(now, id, bytes);
+        let took = self.server.session.handle_tcp(id, bytes);
         assert!(took > 0 || bytes.is_empty());
         Some(id)
     }

@@ -264,8 +264,7 @@ fn a_half_cookie_waits_and_a_full_one_connects() {
     };
     p.run_for(secs(1.0));
     assert!(!is_connected(&p));
-    let now = p.now;
-    p.server.session.handle_tcp(now, raw, &cookie[10..]);
+    p.server.session.handle_tcp(raw, &cookie[10..]);
     p.run_for(secs(0.01));
     assert!(is_connected(&p));
 }
@@ -431,11 +430,10 @@ fn a_name_flood_from_one_peer_locks_nobody_out() {
         flood.extend_from_slice(&buf);
     }
     let raw = p.raw_peer_to_server(&flood[..24]).unwrap();
-    let now = p.now;
     let mut fed = 24;
     while fed < flood.len() {
         p.run_for(secs(0.001));
-        fed += p.server.session.handle_tcp(now, raw, &flood[fed..]);
+        fed += p.server.session.handle_tcp(raw, &flood[fed..]);
     }
     p.run_for(secs(0.01));
     // The flooder is still connected (it broke no rule), and so is a real client that

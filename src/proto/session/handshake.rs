@@ -20,6 +20,7 @@ use crate::wire::{class, system, Cookie};
 impl Session {
     /// TCP is up: queue our cookie and start the greeting clock.
     pub(super) fn start_greeting(&mut self, now: Now, id: PeerId, local: SocketAddrV4) {
+        self.timeouts_changed();
         let timeout = self.limits.handshake_timeout;
         let Some(p) = self.peer_mut(id) else {
             return;
@@ -32,6 +33,7 @@ impl Session {
 
     /// The peer's 24 bytes are in: accept or drop it.
     pub(super) fn handle_cookie(&mut self, now: Now, id: PeerId) {
+        self.timeouts_changed();
         let Some(p) = self.peer(id) else {
             return;
         };
@@ -96,6 +98,7 @@ impl Session {
     /// Our UDP socket for the peer is bound (or not): describe ourselves and count the peer
     /// as connected.
     pub(super) fn finish_handshake(&mut self, now: Now, id: PeerId, udp_port: Option<u16>) {
+        self.timeouts_changed();
         let tv = now.wall;
         let log_handshake = matches!(self.kind, Kind::Client(_)) && self.logs.outgoing.is_some();
         let nic = self.nic;

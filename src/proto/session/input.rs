@@ -40,6 +40,7 @@ impl Session {
 
     /// Server: a datagram arrived on the server port from `from` — a connection request.
     pub fn handle_request(&mut self, now: Now, from: SocketAddrV4, datagram: &[u8]) {
+        self.timeouts_changed();
         let limits = self.limits;
         let req = match wire::lob::parse_request(datagram) {
             Ok(r) => r,
@@ -123,6 +124,7 @@ impl Session {
 
     /// Client: the connection request drew an ICMP "port unreachable".
     pub fn handle_request_refused(&mut self, now: Now) {
+        self.timeouts_changed();
         let limits = self.limits;
         let Kind::Client(c) = &mut self.kind else {
             return;
@@ -181,26 +183,29 @@ impl Session {
 
     /// Where the next bytes read from `peer`'s TCP socket go (empty: read nothing now).
     pub fn rx_spare(&mut self, peer: PeerId) -> &mut [u8] {
+        let budget = self.limits.max_messages_per_peer_per_loop;
         match self.peer_mut(peer) {
-            Some(p) => p.rx_spare(),
-            None => &mut [],
+            // Over its budget for this pass, a peer gets no more reads until the next.
+            Some(p) if p.budget < budget => p.rx_spare(),
+            _ => &mut [],
         }
     }
 
     /// `n` bytes were read into [`rx_spare`](Self::rx_spare).
-    pub fn handle_tcp_data(&mut self, _now: Now, peer: PeerId, n: usize) {
+    pub fn handle_tcp_data(&mut self, peer: PeerId, n: usize) {
         if let Some(p) = self.peer_mut(peer) {
             p.rx_commit(n);
+            self.input_pending = true;
         }
     }
 
     /// Copies bytes read from `peer` into the session; returns how many it took (it takes no
     /// more than it can buffer: feed the rest after draining deliveries).
-    pub fn handle_tcp(&mut self, now: Now, peer: PeerId, bytes: &[u8]) -> usize {
+    pub fn handle_tcp(&mut self, peer: PeerId, bytes: &[u8]) -> usize {
         let spare = self.rx_spare(peer);
         let n = spare.len().min(bytes.len());
         spare[..n].copy_from_slice(&bytes[..n]);
-        self.handle_tcp_data(now, peer, n);
+        self.handle_tcp_data(peer, n);
         n
     }
 
@@ -289,9 +294,10 @@ impl Session {
     }
 
     /// `count` datagrams were received into [`udp_inbox`](Self::udp_inbox).
-    pub fn handle_datagrams(&mut self, _now: Now, peer: PeerId, count: usize) {
+    pub fn handle_datagrams(&mut self, peer: PeerId, count: usize) {
         if let Some(inbox) = self.peer_mut(peer).and_then(|p| p.udp_rx.as_mut()) {
             inbox.filled(count);
+            self.input_pending = true;
         }
     }
 }

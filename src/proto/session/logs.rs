@@ -34,17 +34,22 @@ impl Session {
     /// Starts logging what this side receives: into `sink` for a client (one file across
     /// reconnects), or through `per_peer` for a server (one file per accepted client).
     pub fn set_incoming_log(&mut self, sink: Option<LogSink>, per_peer: Option<PeerLogFactory>) {
+        self.logs.any |= sink.is_some() || per_peer.is_some();
         self.logs.incoming = sink;
         self.logs.per_peer = per_peer;
     }
 
     /// Starts logging everything this side packs.
     pub fn set_outgoing_log(&mut self, sink: LogSink) {
+        self.logs.any = true;
         self.logs.outgoing = Some(sink);
     }
 
     /// Writes a bounded amount of buffered log data (called every pass; never stalls long).
     pub fn flush_logs_some(&mut self, max_bytes: usize) {
+        if !self.logs.any {
+            return;
+        }
         let mut err = None;
         for w in self.log_sinks() {
             if w.pending() > 0 {

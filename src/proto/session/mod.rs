@@ -33,6 +33,7 @@ mod send;
 
 use std::collections::VecDeque;
 use std::net::{Ipv4Addr, SocketAddrV4};
+use std::time::Instant;
 
 use super::client::ClientSchedule;
 use super::endpoint::{Endpoint, LogSink, Phase};
@@ -70,6 +71,8 @@ pub(crate) struct Logs {
     pub(crate) peers_logged: u32,
     /// A log write failed (reported once).
     pub(crate) failed: bool,
+    /// Some log was ever opened (lets a pass without logs skip the flush walk).
+    pub(crate) any: bool,
 }
 
 /// Names learned from peers may use the id space up to this many ids below the wire limit;
@@ -101,6 +104,12 @@ pub struct Session {
     pub(crate) names_refused: u64,
     /// A peer whose reliable backlog overflowed while packing, to be dropped.
     backlogged: Option<PeerId>,
+    /// Input arrived (or a peer's budget was renewed) since a poll last found nothing to
+    /// deliver: lets [`poll_delivery`](Session::poll_delivery) answer "nothing" without a walk.
+    pub(crate) input_pending: bool,
+    /// [`poll_timeout`](Session::poll_timeout)'s answer while nothing that sets a deadline has
+    /// changed (`None`: work it out again). Every pass asks; few passes change it.
+    pub(crate) timeout_cache: std::cell::Cell<Option<Option<Instant>>>,
 }
 
 impl Session {
@@ -129,6 +138,8 @@ impl Session {
             request_len: 0,
             names_refused: 0,
             backlogged: None,
+            input_pending: true,
+            timeout_cache: std::cell::Cell::new(None),
         }
     }
 
@@ -178,7 +189,15 @@ impl Session {
 
     // ------------------------------------------------------------------ peers
 
+    /// Something that sets a deadline changed: [`poll_timeout`](Self::poll_timeout) works it
+    /// out again.
+    #[inline]
+    pub(crate) fn timeouts_changed(&self) {
+        self.timeout_cache.set(None);
+    }
+
     pub(super) fn alloc_peer(&mut self, tcp_only: bool, addr: SocketAddrV4) -> PeerId {
+        self.timeouts_changed();
         let slot = match self.peers.iter().position(Option::is_none) {
             Some(s) => s,
             None => {
@@ -338,6 +357,12 @@ impl Session {
     /// Whether deliveries are waiting (after input that closed a peer, say).
     pub fn has_deliveries(&self) -> bool {
         !self.queue.is_empty() || !self.to_describe.is_empty()
+    }
+
+    /// Whether I/O requests wait for [`poll_io`](Self::poll_io).
+    #[inline]
+    pub fn has_io(&self) -> bool {
+        !self.io.is_empty()
     }
 
     /// Whether this is a client (whose state changes are worth reporting).

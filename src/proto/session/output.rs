@@ -58,6 +58,15 @@ impl Session {
 
     /// The earliest time [`handle_timeout`](Self::handle_timeout) has work to do.
     pub fn poll_timeout(&self) -> Option<Instant> {
+        if let Some(known) = self.timeout_cache.get() {
+            return known;
+        }
+        let d = self.work_out_timeout();
+        self.timeout_cache.set(Some(d));
+        d
+    }
+
+    fn work_out_timeout(&self) -> Option<Instant> {
         let mut d: Option<Instant> = None;
         let mut at = |t: Instant| d = Some(d.map_or(t, |x| x.min(t)));
         for p in self.peers.iter().flatten() {
@@ -85,6 +94,7 @@ impl Session {
     /// Does what is due at `now`: connect and greeting time-outs, the client's next attempt
     /// and its "no answer" explanation, the server's request summary, the replay clock.
     pub fn handle_timeout(&mut self, now: Now) {
+        self.timeouts_changed();
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_ref() else {
                 continue;
@@ -150,6 +160,7 @@ impl Session {
 
     /// Client: starts a connection attempt.
     fn attempt(&mut self, now: Now) {
+        self.timeouts_changed();
         let limits = self.limits;
         let Kind::Client(c) = &mut self.kind else {
             return;
@@ -172,6 +183,7 @@ impl Session {
 
     /// Client: a connection request could not be sent.
     pub fn report_request_error(&mut self, now: Now, to: SocketAddrV4, error: &std::io::Error) {
+        self.timeouts_changed();
         let limits = self.limits;
         let Kind::Client(c) = &mut self.kind else {
             return;
@@ -184,12 +196,16 @@ impl Session {
 
     /// Starts a new loop pass at `now`: every peer gets its full message budget again, and a
     /// replay's clock advances (C++ model: each pass plays what became due since the last).
-    pub fn begin_pass(&mut self, now: Now) {
+    pub fn begin_pass(&mut self, now: &dyn crate::time::TimeSource) {
         for p in self.peers.iter_mut().flatten() {
+            // A peer that used up its budget last pass may still have input buffered.
+            if p.budget >= self.limits.max_messages_per_peer_per_loop {
+                self.input_pending = true;
+            }
             p.budget = 0;
         }
         if let Kind::File(r) = &mut self.kind {
-            r.tick(now.mono);
+            r.tick(now.now().mono);
         }
     }
 }

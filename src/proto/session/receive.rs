@@ -6,7 +6,7 @@ use crate::proto::client::Failure;
 use crate::proto::endpoint::{Phase, RemoteNames};
 use crate::proto::names::NameLimit;
 use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, Severity};
-use crate::time::Now;
+use crate::time::TimeSource;
 use crate::wire::{self, system, MAX_IDS};
 
 /// Where a message came from, for the rules that depend on it.
@@ -30,13 +30,25 @@ enum Outcome {
 impl Session {
     /// The next thing to deliver, or `None` when everything buffered has been consumed (the
     /// shell should then read more for the peers that want it).
-    pub fn poll_delivery(&mut self, now: Now) -> Option<Delivery> {
+    #[inline]
+    pub fn poll_delivery(&mut self, now: &dyn TimeSource) -> Option<Delivery> {
+        if !self.input_pending
+            && self.queue.is_empty()
+            && self.to_describe.is_empty()
+            && !matches!(self.kind, Kind::File(_))
+        {
+            return None;
+        }
+        self.poll_delivery_walk(now)
+    }
+
+    fn poll_delivery_walk(&mut self, now: &dyn TimeSource) -> Option<Delivery> {
         loop {
             if let Some(d) = self.queue.pop_front() {
                 return Some(d);
             }
             if !self.to_describe.is_empty() {
-                self.describe_new_names(now);
+                self.describe_new_names(now.now());
                 continue;
             }
             if matches!(self.kind, Kind::File(_)) {
@@ -44,8 +56,14 @@ impl Session {
             }
             let n = self.peers.len();
             let mut produced = false;
+            let start = self.cursor.min(n);
+            // Round robin from the peer served last (a plain index walk: this runs per message).
             for k in 0..n {
-                let i = (self.cursor + k) % n;
+                let i = if start + k < n {
+                    start + k
+                } else {
+                    start + k - n
+                };
                 let Some(p) = self.peers[i].as_ref() else {
                     continue;
                 };
@@ -66,13 +84,14 @@ impl Session {
                 }
             }
             if !produced {
+                self.input_pending = false;
                 return None;
             }
         }
     }
 
     /// The next delivery from the bytes buffered for the peer in `slot`.
-    fn next_from_peer(&mut self, now: Now, slot: usize) -> Option<Delivery> {
+    fn next_from_peer(&mut self, now: &dyn TimeSource, slot: usize) -> Option<Delivery> {
         loop {
             let p = self.peers[slot].as_mut()?;
             let id = p.id;
@@ -80,7 +99,7 @@ impl Session {
                 Phase::Connecting => return None,
                 Phase::AwaitingCookie => {
                     p.cookie()?;
-                    self.handle_cookie(now, id);
+                    self.handle_cookie(now.now(), id);
                     if !self.queue.is_empty() {
                         return self.queue.pop_front();
                     }
@@ -93,10 +112,10 @@ impl Session {
                 Some(Ok((h, payload))) => {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
-                    match self.handle_message(now, slot, h, len, Via::Tcp) {
+                    match self.handle_message(slot, h, len, Via::Tcp) {
                         Outcome::Deliver(d) => return Some(d),
                         Outcome::Drop(reason) => {
-                            self.drop_peer(now, id, reason, None);
+                            self.drop_peer(now.now(), id, reason, None);
                             return self.queue.pop_front();
                         }
                         Outcome::Continue => {
@@ -109,7 +128,7 @@ impl Session {
                 }
                 Some(Err(e)) => {
                     let reason = format!("malformed message from {}: {e}", p.label);
-                    self.drop_peer(now, id, reason, Some(Failure::Other(e.to_string())));
+                    self.drop_peer(now.now(), id, reason, Some(Failure::Other(e.to_string())));
                     return self.queue.pop_front();
                 }
                 None => {}
@@ -150,10 +169,10 @@ impl Session {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
                     inbox.advance(advance);
-                    match self.handle_message(now, slot, h, len, Via::Udp) {
+                    match self.handle_message(slot, h, len, Via::Udp) {
                         Outcome::Deliver(d) => return Some(d),
                         Outcome::Drop(reason) => {
-                            self.drop_peer(now, id, reason, None);
+                            self.drop_peer(now.now(), id, reason, None);
                             return self.queue.pop_front();
                         }
                         Outcome::Continue => {
@@ -177,7 +196,7 @@ impl Session {
 
     /// The next entry of a replayed log that is due, through the same handling as a live
     /// peer's message.
-    fn next_from_file(&mut self, now: Now) -> Option<Delivery> {
+    fn next_from_file(&mut self, now: &dyn TimeSource) -> Option<Delivery> {
         loop {
             let Kind::File(replay) = &mut self.kind else {
                 return None;
@@ -210,7 +229,7 @@ impl Session {
                 let _ = w.log_message(
                     due.header.type_id,
                     due.header.sender,
-                    now.wall,
+                    now.now().wall,
                     &self.scratch[..len],
                 );
             }
@@ -221,13 +240,13 @@ impl Session {
                 type_id: due.header.type_id,
                 seq: 0,
             };
-            match self.handle_message(now, 0, h, len, Via::Log) {
+            match self.handle_message(0, h, len, Via::Log) {
                 Outcome::Deliver(d) => return Some(d),
                 Outcome::Drop(text) => self.notice(Severity::Warning, text),
                 Outcome::Continue => {}
             }
             if !self.to_describe.is_empty() {
-                self.describe_new_names(now);
+                self.describe_new_names(now.now());
             }
             if let Some(d) = self.queue.pop_front() {
                 return Some(d);
@@ -237,14 +256,7 @@ impl Session {
 
     /// Interprets one message whose payload is in `scratch[..len]`: system messages update
     /// tables; user messages are translated and returned for delivery.
-    fn handle_message(
-        &mut self,
-        _now: Now,
-        slot: usize,
-        h: wire::Header,
-        len: usize,
-        via: Via,
-    ) -> Outcome {
+    fn handle_message(&mut self, slot: usize, h: wire::Header, len: usize, via: Via) -> Outcome {
         let Session {
             peers,
             logs,

@@ -159,6 +159,7 @@ impl Session {
         reason: String,
         failure: Option<Failure>,
     ) {
+        self.timeouts_changed();
         let Some(mut p) = self
             .peers
             .get_mut(id.slot)
