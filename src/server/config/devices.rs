@@ -134,7 +134,7 @@ pub struct Flock {
     pub sensors: u32,
     /// Serial port.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`].
+    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES).
     pub baud: u32,
     /// Report the inverse quaternion (non-zero INVERT).
     pub invert_quaternion: bool,
@@ -155,7 +155,7 @@ pub struct FlockParallel {
     pub sensors: u32,
     /// Master's serial port.
     pub master_port: String,
-    /// Baud rate of all ports, one of [`BAUD_RATES`].
+    /// Baud rate of all ports, one of [`BAUD_RATES`](super::BAUD_RATES).
     pub baud: u32,
     /// The INVERT flag; C++ applies it only to the master, so it changes nothing reported.
     pub invert_quaternion: bool,
@@ -170,7 +170,7 @@ pub struct Magellan {
     pub name: String,
     /// Serial port.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`] (the device documents 9600).
+    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES) (the device documents 9600).
     pub baud: u32,
     /// Use the alternate reset string of older units (`altreset`).
     pub alt_reset: bool,
@@ -183,7 +183,7 @@ pub struct CerealBox {
     pub name: String,
     /// Serial port.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`] (the device documents 19200).
+    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES) (the device documents 19200).
     pub baud: u32,
     /// Buttons, 0..=24 (C++ clamps larger values; we reject them).
     pub buttons: u32,
@@ -212,7 +212,7 @@ pub struct Dyna {
     pub sensors: u32,
     /// Serial port.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`].
+    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES).
     pub baud: u32,
 }
 

@@ -347,7 +347,7 @@ fn unknown_message(keyword: &str) -> String {
     base
 }
 
-/// Result of [`parse_str_lenient`]: the entries that parsed and the problems with the rest.
+/// Result of [`parse_str_lenient`](super::parse_str_lenient): the entries that parsed and the problems with the rest.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ParseReport {
     /// Entries that parsed, in file order (unknown ones included).

@@ -5,7 +5,7 @@ use std::fmt;
 /// Where an entry or a problem is in a configuration file.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct SourceLocation {
-    /// The file name as given to the parser (a path for [`parse_file`]).
+    /// The file name as given to the parser (a path for [`parse_file`](super::parse_file)).
     pub file: String,
     /// 1-based line number.
     pub line: usize,
@@ -24,7 +24,7 @@ pub enum ConfigErrorKind {
     Io,
     /// The file is not valid UTF-8.
     NotUtf8,
-    /// A line is longer than [`MAX_LINE_LEN`].
+    /// A line is longer than [`MAX_LINE_LEN`](super::MAX_LINE_LEN).
     LineTooLong,
     /// An entry has fewer arguments than it needs.
     MissingArguments,
@@ -44,7 +44,7 @@ pub enum ConfigErrorKind {
     UnclosedBlock,
     /// A line inside a multi-line entry is malformed.
     BadBlockLine,
-    /// The keyword is not one we know (see [`DeviceEntry::unknown_error`]).
+    /// The keyword is not one we know (see [`DeviceEntry::unknown_error`](super::DeviceEntry::unknown_error)).
     UnknownDevice,
     /// `vrpn_Tracker.cfg` has no entry for the requested tracker.
     TrackerNotFound,

@@ -88,7 +88,7 @@ pub struct Fastrak {
     pub name: String,
     /// Serial port, passed to the OS unchanged.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`].
+    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES).
     pub baud: u32,
     /// IS-900 hardware timestamps (an option token starting with `IS900time`).
     pub is900_timestamps: bool,
