@@ -1,5 +1,5 @@
 //! The server loop: devices, then the connection, then a wait that sleeps only when nothing is
-//! due (CONFIG.md §1 main loop, with an event-driven wait instead of a fixed sleep).
+//! due (the C++ main loop, with an event-driven wait instead of a fixed sleep).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
