@@ -2,6 +2,11 @@
 //! `vrpn_log_devices`): a summary, a decoded dump (text or JSON lines), and CSV export of one
 //! device's reports. The work is done by `vrpn::log::tools`.
 
+#[path = "common/cli.rs"]
+mod cli;
+#[path = "common/output.rs"]
+mod output;
+
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::process::ExitCode;
@@ -9,9 +14,14 @@ use std::process::ExitCode;
 use vrpn::log::tools::{self, CsvKind, Summary, Walk};
 use vrpn::log::{LogError, LogReader};
 
+use output::{errln, outln};
+
+const PROGRAM: &str = "vrpn_log";
+
 const USAGE: &str = "usage: vrpn_log summary FILE
        vrpn_log dump FILE [--json] [--device NAME] [--type NAME]
        vrpn_log csv FILE DEVICE [--kind KIND] [-o OUT]
+       vrpn_log --help | --version
 
   summary   cookie version, duration (highest - lowest user timestamp), first and last user
             message times, per device and message type the count and average rate, and the
@@ -24,7 +34,10 @@ const USAGE: &str = "usage: vrpn_log summary FILE
     --type NAME   only entries of this type (e.g. \"vrpn_Tracker Pos_Quat\", DISCONNECT)
   csv       one device's reports as CSV with a header row, floats in full precision
     --kind KIND   pose (default), velocity, acceleration, button, analog or dial
-    -o OUT        write to OUT instead of standard output
+    -o, --output OUT
+                  write to OUT instead of standard output
+  -h, --help      print this help
+  --version       print the version
 
 Names are resolved through the descriptions inside the log; a DISCONNECT entry clears them.
 Exit status: 0 on success, 1 when the file cannot be read or is damaged (the whole entries
@@ -40,17 +53,17 @@ fn synopsis() -> String {
 
 fn usage_error(msg: impl std::fmt::Display) -> Fail {
     Fail(
-        format!("vrpn_log: {msg}\n{}\n(vrpn_log -h for details)", synopsis()),
-        2,
+        cli::usage_error(PROGRAM, &msg.to_string()),
+        cli::USAGE_STATUS,
     )
 }
 
 fn log_error(e: &LogError) -> Fail {
-    Fail(format!("vrpn_log: {e}"), 1)
+    Fail(format!("{PROGRAM}: {e}"), 1)
 }
 
 fn io_fail(what: &str, e: io::Error) -> Fail {
-    Fail(format!("vrpn_log: {what}: {e}"), 1)
+    Fail(format!("{PROGRAM}: {what}: {e}"), 1)
 }
 
 /// Writes to stdout; a closed pipe (e.g. `| head`) ends the program quietly.
@@ -62,54 +75,92 @@ fn out_error(e: io::Error) -> Fail {
     }
 }
 
-/// Splits arguments into positionals and `--option VALUE` / flag pairs.
-struct Args {
-    positional: Vec<String>,
-    options: Vec<(String, Option<String>)>,
+/// What the command line asks for.
+enum Command {
+    Run(Args),
+    Help,
+    Version,
 }
 
-fn parse_args(
-    args: impl Iterator<Item = String>,
-    flags: &[&str],
-    valued: &[&str],
-) -> Result<Args, Fail> {
-    let mut a = Args {
-        positional: Vec::new(),
-        options: Vec::new(),
-    };
-    let mut args = args.peekable();
-    while let Some(s) = args.next() {
-        if s == "--" {
-            a.positional.extend(args.by_ref());
-            break;
-        }
-        if flags.contains(&s.as_str()) {
-            a.options.push((s, None));
-        } else if valued.contains(&s.as_str()) {
-            match args.next() {
-                Some(v) => a.options.push((s, Some(v))),
-                None => return Err(usage_error(format!("{s} needs a value"))),
+/// A command with its arguments and options.
+#[derive(Default)]
+struct Args {
+    command: String,
+    /// Arguments after the command.
+    positional: Vec<String>,
+    /// The options given, by their long spelling, in order (to refuse the ones the command
+    /// does not take).
+    given: Vec<&'static str>,
+    json: bool,
+    device: Option<String>,
+    type_name: Option<String>,
+    kind: Option<String>,
+    output: Option<String>,
+}
+
+fn parse_args() -> Result<Command, Fail> {
+    parse_options().map_err(|e| usage_error(cli::describe(&e)))
+}
+
+fn parse_options() -> Result<Command, lexopt::Error> {
+    use lexopt::prelude::*;
+    let mut parser = lexopt::Parser::from_env();
+    let mut a = Args::default();
+    let mut command = None;
+    while let Some(arg) = parser.next()? {
+        let option = match arg {
+            Short('h') | Long("help") => return Ok(Command::Help),
+            Long("version") => return Ok(Command::Version),
+            Long("json") => {
+                a.json = true;
+                "--json"
             }
-        } else if s.starts_with('-') && s.len() > 1 {
-            return Err(usage_error(format!("unknown option {s}")));
-        } else {
-            a.positional.push(s);
-        }
+            Long("device") => {
+                a.device = Some(parser.value()?.string()?);
+                "--device"
+            }
+            Long("type") => {
+                a.type_name = Some(parser.value()?.string()?);
+                "--type"
+            }
+            Long("kind") => {
+                a.kind = Some(parser.value()?.string()?);
+                "--kind"
+            }
+            Short('o') | Long("output") => {
+                a.output = Some(parser.value()?.string()?);
+                "--output"
+            }
+            Value(v) => {
+                let v = v.string()?;
+                if command.is_none() {
+                    command = Some(v);
+                } else {
+                    a.positional.push(v);
+                }
+                continue;
+            }
+            _ => return Err(arg.unexpected()),
+        };
+        a.given.push(option);
     }
-    Ok(a)
+    match command {
+        Some(c) if c == "help" => Ok(Command::Help),
+        Some(c) => {
+            a.command = c;
+            Ok(Command::Run(a))
+        }
+        None => Err("no command".into()),
+    }
 }
 
 impl Args {
-    fn flag(&self, name: &str) -> bool {
-        self.options.iter().any(|(k, _)| k == name)
-    }
-
-    fn value(&self, names: &[&str]) -> Option<&str> {
-        self.options
-            .iter()
-            .rev()
-            .find(|(k, _)| names.contains(&k.as_str()))
-            .and_then(|(_, v)| v.as_deref())
+    /// Refuses options the command does not take.
+    fn only(&self, allowed: &[&str]) -> Result<(), Fail> {
+        match self.given.iter().find(|o| !allowed.contains(o)) {
+            Some(o) => Err(usage_error(format!("{} takes no {o} option", self.command))),
+            None => Ok(()),
+        }
     }
 
     fn file(&self, extra: usize) -> Result<&str, Fail> {
@@ -130,6 +181,7 @@ fn open(path: &str) -> Result<LogReader, Fail> {
 }
 
 fn summary(args: Args) -> Result<(), Fail> {
+    args.only(&[])?;
     let reader = open(args.file(0)?)?;
     let s = Summary::compute(&reader);
     let mut out = io::stdout().lock();
@@ -143,10 +195,11 @@ fn summary(args: Args) -> Result<(), Fail> {
 }
 
 fn dump(args: Args) -> Result<(), Fail> {
+    args.only(&["--json", "--device", "--type"])?;
     let reader = open(args.file(0)?)?;
-    let json = args.flag("--json");
-    let device = args.value(&["--device"]);
-    let type_name = args.value(&["--type"]);
+    let json = args.json;
+    let device = args.device.as_deref();
+    let type_name = args.type_name.as_deref();
     let mut out = BufWriter::new(io::stdout().lock());
     let mut line = String::with_capacity(256);
     let (mut device_seen, mut type_seen) = (false, false);
@@ -185,14 +238,16 @@ fn dump(args: Args) -> Result<(), Fail> {
             }
             type_seen = true;
         }
-        line.clear();
         if json {
-            tools::format_json(&mut line, &rec);
+            serde_json::to_writer(&mut out, &rec)
+                .map_err(io::Error::from)
+                .map_err(out_error)?;
         } else {
+            line.clear();
             tools::format_text(&mut line, &rec);
+            out.write_all(line.as_bytes()).map_err(out_error)?;
         }
-        line.push('\n');
-        out.write_all(line.as_bytes()).map_err(out_error)?;
+        out.write_all(b"\n").map_err(out_error)?;
     }
     out.flush().map_err(out_error)?;
     if let Some(e) = damage {
@@ -231,9 +286,10 @@ fn list(names: &[String]) -> String {
 }
 
 fn csv(args: Args) -> Result<(), Fail> {
+    args.only(&["--kind", "--output"])?;
     let path = args.file(1)?;
     let device = args.positional[1].as_str();
-    let kind = match args.value(&["--kind"]) {
+    let kind = match args.kind.as_deref() {
         None => CsvKind::Pose,
         Some(k) => CsvKind::parse(k).ok_or_else(|| {
             usage_error(format!(
@@ -244,7 +300,7 @@ fn csv(args: Args) -> Result<(), Fail> {
     let reader = open(path)?;
     let plan = tools::plan_csv(&reader, device, kind)
         .map_err(|e| Fail(format!("vrpn_log: {}: {e}", reader.path().display()), 1))?;
-    let result = match args.value(&["-o", "--output"]) {
+    let result = match args.output.as_deref() {
         Some(out_path) if out_path != "-" => {
             let file = File::create(out_path).map_err(|e| io_fail(out_path, e))?;
             let mut w = BufWriter::new(file);
@@ -264,34 +320,43 @@ fn csv(args: Args) -> Result<(), Fail> {
 }
 
 fn run() -> Result<(), Fail> {
-    let mut args = std::env::args().skip(1);
-    let Some(cmd) = args.next() else {
-        return Err(Fail(synopsis(), 2));
-    };
-    let rest: Vec<String> = args.collect();
-    if matches!(cmd.as_str(), "-h" | "--help" | "help")
-        || rest.iter().any(|a| a == "-h" || a == "--help")
-    {
-        println!("{USAGE}");
-        return Ok(());
+    if std::env::args_os().len() < 2 {
+        return Err(Fail(synopsis(), cli::USAGE_STATUS));
     }
-    let rest = rest.into_iter();
-    match cmd.as_str() {
-        "summary" => summary(parse_args(rest, &[], &[])?),
-        "dump" => dump(parse_args(rest, &["--json"], &["--device", "--type"])?),
-        "csv" => csv(parse_args(rest, &[], &["--kind", "-o", "--output"])?),
+    let args = match parse_args()? {
+        Command::Help => {
+            outln!("{USAGE}");
+            return Ok(());
+        }
+        Command::Version => {
+            outln!("{}", cli::version(PROGRAM));
+            return Ok(());
+        }
+        Command::Run(args) => args,
+    };
+    match args.command.as_str() {
+        "summary" => summary(args),
+        "dump" => dump(args),
+        "csv" => csv(args),
         other => Err(usage_error(format!("unknown command {other:?}"))),
     }
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
+    let status = match run() {
+        Ok(()) => 0,
         Err(Fail(msg, code)) => {
             if !msg.is_empty() {
-                eprintln!("{msg}");
+                errln!("{msg}");
             }
-            ExitCode::from(code)
+            code
         }
+    };
+    match output::failure() {
+        Some(e) => {
+            errln!("{PROGRAM}: writing output: {e}");
+            ExitCode::from(1)
+        }
+        None => ExitCode::from(status),
     }
 }

@@ -1,6 +1,12 @@
 //! vrpn_ping: measures the user-level round trip (ping to pong) to any VRPN server, C++ or ours.
 
+#[path = "common/cli.rs"]
+mod cli;
+#[path = "common/output.rs"]
+mod output;
+
 use std::cell::Cell;
+use std::process::ExitCode;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
@@ -8,54 +14,89 @@ use vrpn::devices::base::{PING_MESSAGE, PONG_MESSAGE};
 use vrpn::wire::class;
 use vrpn::{Connection, DeviceName, SenderFilter, TimeVal};
 
-const USAGE: &str = "usage: vrpn_ping DEVICE@HOST[:PORT] [-n COUNT]
-  Sends COUNT pings (default 1000) to DEVICE and prints the round-trip p50/p99/max in µs.
-  The server answers pings only for devices it has, so DEVICE must exist there.";
+use output::{errln, outln};
 
-fn main() {
+const PROGRAM: &str = "vrpn_ping";
+
+const USAGE: &str = "usage: vrpn_ping [-n COUNT] DEVICE@HOST[:PORT]
+       vrpn_ping --help | --version
+  Sends COUNT pings (default 1000) to DEVICE and prints the round-trip p50/p99/max in µs.
+  The server answers pings only for devices it has, so DEVICE must exist there.
+  -n, --count COUNT  number of pings, at least 1 (default 1000)
+  -h, --help         print this help
+  --version          print the version";
+
+/// What the command line asks for.
+enum Command {
+    Ping { name: String, count: usize },
+    Help,
+    Version,
+}
+
+fn parse_args() -> Result<Command, lexopt::Error> {
+    use lexopt::prelude::*;
+    let mut parser = lexopt::Parser::from_env();
     let mut count = 1000usize;
     let mut name = None;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "-n" => match args.next().and_then(|v| v.parse().ok()) {
-                Some(n) if n > 0 => count = n,
-                _ => {
-                    eprintln!("-n needs a positive count\n{USAGE}");
-                    std::process::exit(2);
+    while let Some(arg) = parser.next()? {
+        match arg {
+            Short('n') | Long("count") => {
+                count = cli::value(&mut parser, "-n", "a positive count")?;
+                if count == 0 {
+                    return Err("-n needs a positive count, got 0".into());
                 }
-            },
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return;
             }
-            s if name.is_none() && !s.starts_with('-') => name = Some(s.to_string()),
-            s => {
-                eprintln!("unexpected argument {s:?}\n{USAGE}");
-                std::process::exit(2);
-            }
+            Short('h') | Long("help") => return Ok(Command::Help),
+            Long("version") => return Ok(Command::Version),
+            Value(v) if name.is_none() => name = Some(v.string()?),
+            _ => return Err(arg.unexpected()),
         }
     }
-    let Some(name) = name else {
-        eprintln!("{USAGE}");
-        std::process::exit(2);
-    };
-    match run(&name, count) {
-        Ok(mut rtts) => {
-            rtts.sort_unstable_by(f64::total_cmp);
-            let pct = |p: f64| rtts[((rtts.len() - 1) as f64 * p).round() as usize];
-            println!(
-                "{} pings to {name}: p50 {:.1} µs  p99 {:.1} µs  max {:.1} µs",
-                rtts.len(),
-                pct(0.5),
-                pct(0.99),
-                rtts[rtts.len() - 1]
-            );
+    match name {
+        Some(name) => Ok(Command::Ping { name, count }),
+        None => Err("name the DEVICE@HOST[:PORT] to ping".into()),
+    }
+}
+
+fn main() -> ExitCode {
+    let status = match parse_args() {
+        Ok(Command::Help) => {
+            outln!("{USAGE}");
+            0
         }
+        Ok(Command::Version) => {
+            outln!("{}", cli::version(PROGRAM));
+            0
+        }
+        Ok(Command::Ping { name, count }) => match run(&name, count) {
+            Ok(mut rtts) => {
+                rtts.sort_unstable_by(f64::total_cmp);
+                let pct = |p: f64| rtts[((rtts.len() - 1) as f64 * p).round() as usize];
+                outln!(
+                    "{} pings to {name}: p50 {:.1} µs  p99 {:.1} µs  max {:.1} µs",
+                    rtts.len(),
+                    pct(0.5),
+                    pct(0.99),
+                    rtts[rtts.len() - 1]
+                );
+                0
+            }
+            Err(e) => {
+                errln!("{PROGRAM}: {e}");
+                1
+            }
+        },
         Err(e) => {
-            eprintln!("vrpn_ping: {e}");
-            std::process::exit(1);
+            errln!("{}", cli::usage_error(PROGRAM, &cli::describe(&e)));
+            cli::USAGE_STATUS
         }
+    };
+    match output::failure() {
+        Some(e) => {
+            errln!("{PROGRAM}: writing output: {e}");
+            ExitCode::from(1)
+        }
+        None => ExitCode::from(status),
     }
 }
 

@@ -2,107 +2,125 @@
 //! `--json` prints one JSON object per line; `--list HOST[:PORT]` prints the device names a
 //! server announces.
 
-use std::cell::Cell;
+#[path = "common/cli.rs"]
+mod cli;
+#[path = "common/output.rs"]
+mod output;
+#[path = "common/signals.rs"]
+mod signals;
+
 use std::fmt::Write as _;
-use std::rc::Rc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use serde::ser::{SerializeMap, Serializer as _};
+use serde_json::ser::{CompactFormatter, Compound};
 use vrpn::{
     AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, TextReceiver,
-    TextSeverity, TrackerRemote,
+    TextSeverity, TimeVal, TrackerRemote,
 };
+
+use output::{errln, outln};
+
+const PROGRAM: &str = "vrpn_print_devices";
 
 const USAGE: &str =
     "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] DEVICE@HOST[:PORT]...
        vrpn_print_devices --list HOST[:PORT]
+       vrpn_print_devices --help | --version
   DEVICE@HOST        e.g. Tracker0@localhost, Tracker0@tcp://host:3883, Tracker0@host:3884
   --json             one JSON object per report: device, kind, time, and the values
   --seconds S        exit after S seconds (default: run until interrupted)
   --log FILE         log every message received to FILE (C++ .vrpn format; one file per
                      server: FILE-2.vrpn, … for the second and later); replay it with
                      DEVICE@file:FILE
-  --list HOST[:PORT] print the device names the server announces, then exit";
+  --list HOST[:PORT] print the device names the server announces, then exit
+  -h, --help         print this help
+  --version          print the version";
 
-static STOP: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_signal(_: i32) {
-    STOP.store(true, Ordering::Relaxed);
+/// What the command line asks for.
+enum Command {
+    Print(PrintOptions),
+    List(String),
+    Help,
+    Version,
 }
 
-fn install_signal_handlers() {
-    use nix::sys::signal::{sigaction, SaFlags, SigAction, SigHandler, SigSet, Signal};
-    let action = SigAction::new(
-        SigHandler::Handler(on_signal),
-        SaFlags::empty(),
-        SigSet::empty(),
-    );
-    for s in [Signal::SIGINT, Signal::SIGTERM] {
-        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
-        unsafe {
-            let _ = sigaction(s, &action);
-        }
-    }
+/// Options of the report printer.
+#[derive(Default)]
+struct PrintOptions {
+    json: bool,
+    seconds: Option<f64>,
+    log: Option<String>,
+    names: Vec<String>,
 }
 
-/// Formats an f64 as JSON (null for NaN and infinities).
-fn num(out: &mut String, v: f64) {
-    if v.is_finite() {
-        let _ = write!(out, "{v:?}");
-    } else {
-        out.push_str("null");
-    }
-}
-
-fn arr(out: &mut String, vals: &[f64]) {
-    out.push('[');
-    for (i, v) in vals.iter().enumerate() {
-        if i > 0 {
-            out.push(',');
-        }
-        num(out, *v);
-    }
-    out.push(']');
-}
-
-fn json_str(out: &mut String, s: &str) {
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
+fn parse_args() -> Result<Command, lexopt::Error> {
+    use lexopt::prelude::*;
+    let mut parser = lexopt::Parser::from_env();
+    let mut o = PrintOptions::default();
+    let mut list = None;
+    while let Some(arg) = parser.next()? {
+        match arg {
+            Long("json") => o.json = true,
+            Long("seconds") => {
+                let s: f64 = cli::value(&mut parser, "--seconds", "a number of seconds")?;
+                if !(s.is_finite() && s >= 0.0) {
+                    return Err(format!("--seconds needs a number of seconds, got {s}").into());
+                }
+                o.seconds = Some(s);
             }
-            c => out.push(c),
+            Long("log") => o.log = Some(parser.value()?.string()?),
+            Long("list") => list = Some(parser.value()?.string()?),
+            Short('h') | Long("help") => return Ok(Command::Help),
+            Long("version") => return Ok(Command::Version),
+            Value(name) => o.names.push(name.string()?),
+            _ => return Err(arg.unexpected()),
         }
     }
-    out.push('"');
+    match list {
+        Some(location) if o.names.is_empty() => Ok(Command::List(location)),
+        Some(_) => Err("--list takes no device names".into()),
+        None if o.names.is_empty() => Err("name at least one DEVICE@HOST".into()),
+        None => Ok(Command::Print(o)),
+    }
 }
 
-fn head(device: &str, kind: &str, time: vrpn::TimeVal) -> String {
-    let mut s = String::with_capacity(200);
-    s.push_str("{\"device\":");
-    json_str(&mut s, device);
-    s.push_str(",\"kind\":\"");
-    s.push_str(kind);
-    s.push_str("\",\"time\":");
-    num(&mut s, time.as_secs_f64());
-    s
+/// Formats one JSON report line: `device`, `kind` and `time` (seconds since the epoch), then
+/// the fields `fields` adds, in that order.
+fn json_report(
+    device: &str,
+    kind: &str,
+    time: TimeVal,
+    fields: impl FnOnce(&mut Compound<'_, &mut Vec<u8>, CompactFormatter>) -> serde_json::Result<()>,
+) -> String {
+    let mut buf = Vec::with_capacity(200);
+    let mut ser = serde_json::Serializer::new(&mut buf);
+    let written = ser.serialize_map(None).and_then(|mut map| {
+        map.serialize_entry("device", device)?;
+        map.serialize_entry("kind", kind)?;
+        map.serialize_entry("time", &time.as_secs_f64())?;
+        fields(&mut map)?;
+        map.end()
+    });
+    // Into memory, from strings and numbers (non-finite ones become null): cannot fail.
+    written.expect("JSON into memory");
+    String::from_utf8(buf).expect("serde_json writes UTF-8")
 }
 
-fn list(location: &str) -> i32 {
-    let name = format!("vrpn_print_devices@{location}");
+/// Prints the device names the server at `location` announces. Returns the exit status.
+fn list(location: &str) -> u8 {
+    let name = format!("{PROGRAM}@{location}");
     let conn = match Connection::open(&name) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("vrpn_print_devices: {e}");
+            errln!("{PROGRAM}: {e}");
             return 2;
         }
     };
     let start = Instant::now();
     let mut connected_at = None;
-    while start.elapsed() < Duration::from_secs(10) && !STOP.load(Ordering::Relaxed) {
+    while start.elapsed() < Duration::from_secs(10) && !signals::stop_requested() {
         let _ = conn.mainloop();
         if conn.state() == ConnectionState::Connected && connected_at.is_none() {
             connected_at = Some(Instant::now());
@@ -110,81 +128,91 @@ fn list(location: &str) -> i32 {
         // Descriptions arrive right after the cookie; give late ones a moment.
         if connected_at.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
             for s in conn.peer_senders() {
-                if s != "VRPN Control" && s != "vrpn_Forwarder_Brain" && s != "vrpn_print_devices" {
-                    println!("{s}");
+                if s != "VRPN Control" && s != "vrpn_Forwarder_Brain" && s != PROGRAM {
+                    outln!("{s}");
                 }
             }
             return 0;
         }
         let _ = conn.wait(Duration::from_millis(10));
     }
-    eprintln!("vrpn_print_devices: no VRPN server answered at {location} within 10 s");
+    if signals::stop_requested() {
+        return 0;
+    }
+    errln!("{PROGRAM}: no VRPN server answered at {location} within 10 s");
     1
 }
 
-fn main() {
-    let mut json = false;
-    let mut log: Option<String> = None;
-    let mut seconds: Option<f64> = None;
-    let mut names = Vec::new();
-    let mut args = std::env::args().skip(1);
-    install_signal_handlers();
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--json" => json = true,
-            "--log" => match args.next() {
-                Some(f) => log = Some(f),
-                None => {
-                    eprintln!("--log needs a file name\n{USAGE}");
-                    std::process::exit(2);
-                }
-            },
-            "--seconds" => {
-                seconds = args.next().and_then(|s| s.parse().ok());
-                if seconds.is_none() {
-                    eprintln!("--seconds needs a number\n{USAGE}");
-                    std::process::exit(2);
-                }
-            }
-            "--list" => match args.next() {
-                Some(loc) => std::process::exit(list(&loc)),
-                None => {
-                    eprintln!("--list needs HOST[:PORT]\n{USAGE}");
-                    std::process::exit(2);
-                }
-            },
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return;
-            }
-            s if s.starts_with("--") => {
-                eprintln!("unknown option {s}\n{USAGE}");
-                std::process::exit(2);
-            }
-            s => names.push(s.to_string()),
+fn main() -> ExitCode {
+    let status = match parse_args() {
+        Ok(Command::Help) => {
+            outln!("{USAGE}");
+            0
         }
+        Ok(Command::Version) => {
+            outln!("{}", cli::version(PROGRAM));
+            0
+        }
+        Ok(Command::List(location)) => {
+            signals::install();
+            list(&location)
+        }
+        Ok(Command::Print(options)) => {
+            signals::install();
+            print(&options)
+        }
+        Err(e) => {
+            errln!("{}", cli::usage_error(PROGRAM, &cli::describe(&e)));
+            cli::USAGE_STATUS
+        }
+    };
+    match output::failure() {
+        Some(e) => {
+            errln!("{PROGRAM}: writing output: {e}");
+            ExitCode::from(1)
+        }
+        None => ExitCode::from(status),
     }
-    if names.is_empty() {
-        eprintln!("{USAGE}");
-        std::process::exit(2);
+}
+
+/// The remotes of one named device.
+struct Opened {
+    tracker: TrackerRemote,
+    button: ButtonRemote,
+    analog: AnalogRemote,
+    dial: DialRemote,
+    text: TextReceiver,
+}
+
+impl Opened {
+    fn mainloop(&self) -> Result<(), vrpn::Error> {
+        self.tracker.mainloop()?;
+        self.button.mainloop()?;
+        self.analog.mainloop()?;
+        self.dial.mainloop()?;
+        self.text.mainloop()
     }
-    let mut trackers = Vec::new();
+}
+
+/// Opens every device and prints its reports until the time is up, a signal comes or the
+/// output is closed. Returns the exit status.
+fn print(o: &PrintOptions) -> u8 {
+    let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
-    let printed = Rc::new(Cell::new(0u64));
-    for name in &names {
+    for name in &o.names {
         if let Err(e) = DeviceName::parse(name) {
-            eprintln!("vrpn_print_devices: {e}");
-            std::process::exit(2);
+            errln!("{PROGRAM}: {e}");
+            return 2;
         }
-        let t = match TrackerRemote::new(name) {
+        let tracker = match TrackerRemote::new(name) {
             Ok(t) => t,
             Err(e) => {
-                eprintln!("vrpn_print_devices: {name}: {e}");
-                std::process::exit(2);
+                errln!("{PROGRAM}: {name}: {e}");
+                return 2;
             }
         };
-        if let Some(path) = &log {
-            let conn = t.connection();
+        if let Some(path) = &o.log {
+            let conn = tracker.connection();
             if !logged.iter().any(|c: &Connection| c.same_as(conn)) {
                 let file = match logged.len() {
                     0 => path.clone(),
@@ -194,188 +222,169 @@ fn main() {
                     },
                 };
                 if let Err(e) = conn.log_incoming(&file) {
-                    eprintln!("vrpn_print_devices: --log {file}: {e}");
-                    std::process::exit(2);
+                    errln!("{PROGRAM}: --log {file}: {e}");
+                    return 2;
                 }
                 logged.push(conn.clone());
             }
         }
-        let label = name.clone();
-        let device = t.device().to_string();
-        let p = printed.clone();
-        if json {
-            let d = device.clone();
-            t.on_pose(move |r| {
-                let mut s = head(&d, "pose", r.time);
-                let _ = write!(s, ",\"sensor\":{},\"pos\":", r.sensor);
-                arr(&mut s, &[r.pos.x, r.pos.y, r.pos.z]);
-                s.push_str(",\"quat\":");
-                arr(&mut s, &[r.quat.i, r.quat.j, r.quat.k, r.quat.w]);
-                s.push('}');
-                println!("{s}");
-                p.set(p.get() + 1);
-            });
-            let d = device.clone();
-            let p = printed.clone();
-            t.on_velocity(move |r| {
-                let mut s = head(&d, "velocity", r.time);
-                let _ = write!(s, ",\"sensor\":{},\"vel\":", r.sensor);
-                arr(&mut s, &[r.vel.x, r.vel.y, r.vel.z]);
-                s.push_str(",\"vel_quat\":");
-                let q = &r.vel_quat;
-                arr(&mut s, &[q.i, q.j, q.k, q.w]);
-                s.push_str(",\"vel_quat_dt\":");
-                num(&mut s, r.vel_quat_dt);
-                let w = r.angular_velocity();
-                s.push_str(",\"angular_velocity\":");
-                arr(&mut s, &[w.x, w.y, w.z]);
-                s.push('}');
-                println!("{s}");
-                p.set(p.get() + 1);
-            });
-            let d = device;
-            let p = printed.clone();
-            t.on_acceleration(move |r| {
-                let mut s = head(&d, "acceleration", r.time);
-                let _ = write!(s, ",\"sensor\":{},\"acc\":", r.sensor);
-                arr(&mut s, &[r.acc.x, r.acc.y, r.acc.z]);
-                s.push_str(",\"acc_quat\":");
-                let q = &r.acc_quat;
-                arr(&mut s, &[q.i, q.j, q.k, q.w]);
-                s.push_str(",\"acc_quat_dt\":");
-                num(&mut s, r.acc_quat_dt);
-                s.push('}');
-                println!("{s}");
-                p.set(p.get() + 1);
-            });
-        } else {
-            let l = label.clone();
-            t.on_pose(move |r| {
-                println!(
-                    "Tracker {l}, sensor {}:\n     pos ({:5.2}, {:5.2}, {:5.2}); quat ({:5.2}, {:5.2}, {:5.2}, {:5.2})",
-                    r.sensor, r.pos.x, r.pos.y, r.pos.z, r.quat.i, r.quat.j, r.quat.k, r.quat.w
-                );
-                p.set(p.get() + 1);
-            });
-            let l = label.clone();
-            let p = printed.clone();
-            t.on_velocity(move |r| {
-                let q = &r.vel_quat;
-                println!(
-                    "Tracker {l}, sensor {}:\n     vel ({:5.2}, {:5.2}, {:5.2}); quatvel ({:5.2}, {:5.2}, {:5.2}, {:5.2}), dt {:5.2}",
-                    r.sensor, r.vel.x, r.vel.y, r.vel.z, q.i, q.j, q.k, q.w, r.vel_quat_dt
-                );
-                p.set(p.get() + 1);
-            });
-            let l = label;
-            let p = printed.clone();
-            t.on_acceleration(move |r| {
-                let q = &r.acc_quat;
-                println!(
-                    "Tracker {l}, sensor {}:\n     acc ({:5.2}, {:5.2}, {:5.2}); quatacc ({:5.2}, {:5.2}, {:5.2}, {:5.2}), dt {:5.2}",
-                    r.sensor, r.acc.x, r.acc.y, r.acc.z, q.i, q.j, q.k, q.w, r.acc_quat_dt
-                );
-                p.set(p.get() + 1);
-            });
-        }
-        let others = match open_others(name, json, &printed) {
-            Ok(o) => o,
+        let opened = match open_others(name, tracker, o.json) {
+            Ok(d) => d,
             Err(e) => {
-                eprintln!("vrpn_print_devices: {name}: {e}");
-                std::process::exit(2);
+                errln!("{PROGRAM}: {name}: {e}");
+                return 2;
             }
         };
-        if !json {
-            println!("Opened {name} as: Tracker Button Analog Dial Text.");
+        if !o.json {
+            outln!("Opened {name} as: Tracker Button Analog Dial Text.");
         }
-        trackers.push((t, others));
+        devices.push(opened);
     }
-    if !json {
-        println!("Press ^C to exit.");
+    if !o.json {
+        outln!("Press ^C to exit.");
     }
     let start = Instant::now();
-    while !STOP.load(Ordering::Relaxed) {
-        if seconds.is_some_and(|s| start.elapsed().as_secs_f64() >= s) {
+    while !signals::stop_requested() && !output::closed() {
+        if o.seconds
+            .is_some_and(|s| start.elapsed().as_secs_f64() >= s)
+        {
             break;
         }
-        for (t, o) in &trackers {
-            if let Err(e) = t
-                .mainloop()
-                .and_then(|_| o.0.mainloop())
-                .and_then(|_| o.1.mainloop())
-                .and_then(|_| o.2.mainloop())
-                .and_then(|_| o.3.mainloop())
-            {
-                eprintln!("vrpn_print_devices: {e}");
-                std::process::exit(1);
+        for d in &devices {
+            if let Err(e) = d.mainloop() {
+                errln!("{PROGRAM}: {e}");
+                return 1;
             }
         }
         // Sleep until data arrives (or 10 ms for ping timers and reconnect attempts).
-        if let Some((t, _)) = trackers.first() {
-            let _ = t.connection().wait(Duration::from_millis(10));
+        if let Some(d) = devices.first() {
+            let _ = d.tracker.connection().wait(Duration::from_millis(10));
         }
     }
+    0
 }
 
-type Others = (ButtonRemote, AnalogRemote, DialRemote, TextReceiver);
-
-/// Opens the Button, Analog, Dial and Text remotes of `name` and attaches the printers (the
-/// C++ formats, or JSON objects of kind button, button_states, analog, dial and text).
-fn open_others(name: &str, json: bool, printed: &Rc<Cell<u64>>) -> Result<Others, vrpn::Error> {
-    let b = ButtonRemote::new(name)?;
-    let a = AnalogRemote::new(name)?;
-    let d = DialRemote::new(name)?;
-    let t = TextReceiver::new(name)?;
-    let device = b.device().to_string();
-    let label = name.to_string();
-    let (dv, p) = (device.clone(), printed.clone());
-    let l = label.clone();
-    b.on_change(move |c| {
+/// Attaches the tracker printers to `tracker` (the C++ formats, or JSON objects of kind pose,
+/// velocity and acceleration).
+fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool) {
+    let device = tracker.device().to_string();
+    let (d, l) = (device.clone(), label.to_owned());
+    tracker.on_pose(move |r| {
         if json {
-            let mut s = head(&dv, "button", c.time);
-            let _ = write!(s, ",\"button\":{},\"state\":{}}}", c.button, c.state);
-            println!("{s}");
+            outln!(
+                "{}",
+                json_report(&d, "pose", r.time, |m| {
+                    m.serialize_entry("sensor", &r.sensor)?;
+                    m.serialize_entry("pos", &[r.pos.x, r.pos.y, r.pos.z])?;
+                    m.serialize_entry("quat", &[r.quat.i, r.quat.j, r.quat.k, r.quat.w])
+                })
+            );
+        } else {
+            outln!(
+                "Tracker {l}, sensor {}:\n     pos ({:5.2}, {:5.2}, {:5.2}); quat ({:5.2}, {:5.2}, {:5.2}, {:5.2})",
+                r.sensor, r.pos.x, r.pos.y, r.pos.z, r.quat.i, r.quat.j, r.quat.k, r.quat.w
+            );
+        }
+    });
+    let (d, l) = (device.clone(), label.to_owned());
+    tracker.on_velocity(move |r| {
+        let q = &r.vel_quat;
+        if json {
+            let w = r.angular_velocity();
+            outln!(
+                "{}",
+                json_report(&d, "velocity", r.time, |m| {
+                    m.serialize_entry("sensor", &r.sensor)?;
+                    m.serialize_entry("vel", &[r.vel.x, r.vel.y, r.vel.z])?;
+                    m.serialize_entry("vel_quat", &[q.i, q.j, q.k, q.w])?;
+                    m.serialize_entry("vel_quat_dt", &r.vel_quat_dt)?;
+                    m.serialize_entry("angular_velocity", &[w.x, w.y, w.z])
+                })
+            );
+        } else {
+            outln!(
+                "Tracker {l}, sensor {}:\n     vel ({:5.2}, {:5.2}, {:5.2}); quatvel ({:5.2}, {:5.2}, {:5.2}, {:5.2}), dt {:5.2}",
+                r.sensor, r.vel.x, r.vel.y, r.vel.z, q.i, q.j, q.k, q.w, r.vel_quat_dt
+            );
+        }
+    });
+    let (d, l) = (device, label.to_owned());
+    tracker.on_acceleration(move |r| {
+        let q = &r.acc_quat;
+        if json {
+            outln!(
+                "{}",
+                json_report(&d, "acceleration", r.time, |m| {
+                    m.serialize_entry("sensor", &r.sensor)?;
+                    m.serialize_entry("acc", &[r.acc.x, r.acc.y, r.acc.z])?;
+                    m.serialize_entry("acc_quat", &[q.i, q.j, q.k, q.w])?;
+                    m.serialize_entry("acc_quat_dt", &r.acc_quat_dt)
+                })
+            );
+        } else {
+            outln!(
+                "Tracker {l}, sensor {}:\n     acc ({:5.2}, {:5.2}, {:5.2}); quatacc ({:5.2}, {:5.2}, {:5.2}, {:5.2}), dt {:5.2}",
+                r.sensor, r.acc.x, r.acc.y, r.acc.z, q.i, q.j, q.k, q.w, r.acc_quat_dt
+            );
+        }
+    });
+}
+
+/// Opens the Button, Analog, Dial and Text remotes of `name` beside its `tracker` and attaches
+/// the printers (the C++ formats, or JSON objects of kind pose, velocity, acceleration, button,
+/// button_states, analog, dial and text).
+fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened, vrpn::Error> {
+    print_tracker(&tracker, name, json);
+    let button = ButtonRemote::new(name)?;
+    let analog = AnalogRemote::new(name)?;
+    let dial = DialRemote::new(name)?;
+    let text = TextReceiver::new(name)?;
+    let device = button.device().to_string();
+    let label = name.to_string();
+    let (dv, l) = (device.clone(), label.clone());
+    button.on_change(move |c| {
+        if json {
+            outln!(
+                "{}",
+                json_report(&dv, "button", c.time, |m| {
+                    m.serialize_entry("button", &c.button)?;
+                    m.serialize_entry("state", &c.state)
+                })
+            );
         } else {
             let what = if c.state != 0 { "pressed" } else { "released" };
-            println!(
+            outln!(
                 "##########################################\nButton {l}, number {} was just {what}\n##########################################",
                 c.button
             );
         }
-        p.set(p.get() + 1);
     });
-    let (dv, p) = (device.clone(), printed.clone());
-    let l = label.clone();
-    b.on_states(move |st| {
+    let (dv, l) = (device.clone(), label.clone());
+    button.on_states(move |st| {
         if json {
-            let mut s = head(&dv, "button_states", st.time);
-            s.push_str(",\"states\":[");
-            for (i, v) in st.as_slice().iter().enumerate() {
-                if i > 0 {
-                    s.push(',');
-                }
-                let _ = write!(s, "{v}");
-            }
-            s.push_str("]}");
-            println!("{s}");
+            outln!(
+                "{}",
+                json_report(&dv, "button_states", st.time, |m| {
+                    m.serialize_entry("states", st.as_slice())
+                })
+            );
         } else {
             let mut s = format!("Button {l} has {} buttons with states:", st.num_buttons);
             for v in st.as_slice() {
                 let _ = write!(s, " {v}");
             }
-            println!("{s}");
+            outln!("{s}");
         }
-        p.set(p.get() + 1);
     });
-    let (dv, p) = (device.clone(), printed.clone());
-    let l = label.clone();
-    a.on_report(move |r| {
+    let (dv, l) = (device.clone(), label.clone());
+    analog.on_report(move |r| {
         if json {
-            let mut s = head(&dv, "analog", r.time);
-            s.push_str(",\"channels\":");
-            arr(&mut s, r.channels());
-            s.push('}');
-            println!("{s}");
+            outln!(
+                "{}",
+                json_report(&dv, "analog", r.time, |m| {
+                    m.serialize_entry("channels", r.channels())
+                })
+            );
         } else {
             let mut s = format!("Analog {l}:\n         ");
             for (i, v) in r.channels().iter().enumerate() {
@@ -385,44 +394,50 @@ fn open_others(name: &str, json: bool, printed: &Rc<Cell<u64>>) -> Result<Others
                 let _ = write!(s, "{v:5.2}");
             }
             let _ = write!(s, " ({} chans)", r.num_channel);
-            println!("{s}");
+            outln!("{s}");
         }
-        p.set(p.get() + 1);
     });
-    let (dv, p) = (device.clone(), printed.clone());
-    let l = label.clone();
-    d.on_update(move |u| {
+    let (dv, l) = (device.clone(), label.clone());
+    dial.on_update(move |u| {
         if json {
-            let mut s = head(&dv, "dial", u.time);
-            let _ = write!(s, ",\"dial\":{},\"change\":", u.dial);
-            num(&mut s, u.change);
-            s.push('}');
-            println!("{s}");
+            outln!(
+                "{}",
+                json_report(&dv, "dial", u.time, |m| {
+                    m.serialize_entry("dial", &u.dial)?;
+                    m.serialize_entry("change", &u.change)
+                })
+            );
         } else {
-            println!("Dial {l}, number {} was moved by {:5.2}", u.dial, u.change);
+            outln!("Dial {l}, number {} was moved by {:5.2}", u.dial, u.change);
         }
-        p.set(p.get() + 1);
     });
-    let (dv, p) = (device, printed.clone());
-    let l = label;
-    t.on_message(move |m| {
+    let (dv, l) = (device, label);
+    text.on_message(move |msg| {
         if json {
-            let mut s = head(&dv, "text", m.time);
-            let sev = match m.severity {
+            let severity = match msg.severity {
                 TextSeverity::Normal => "normal",
                 TextSeverity::Warning => "warning",
                 TextSeverity::Error => "error",
                 TextSeverity::Other(_) => "other",
             };
-            let _ = write!(s, ",\"severity\":\"{sev}\",\"level\":{},\"text\":", m.level);
-            json_str(&mut s, m.text());
-            s.push('}');
-            println!("{s}");
-        } else if m.severity == TextSeverity::Normal {
+            outln!(
+                "{}",
+                json_report(&dv, "text", msg.time, |m| {
+                    m.serialize_entry("severity", severity)?;
+                    m.serialize_entry("level", &msg.level)?;
+                    m.serialize_entry("text", msg.text())
+                })
+            );
+        } else if msg.severity == TextSeverity::Normal {
             // Warnings and errors are printed by the default text printer.
-            println!("{l}: Text message: {}", m.text());
+            outln!("{l}: Text message: {}", msg.text());
         }
-        p.set(p.get() + 1);
     });
-    Ok((b, a, d, t))
+    Ok(Opened {
+        tracker,
+        button,
+        analog,
+        dial,
+        text,
+    })
 }

@@ -1,57 +1,56 @@
 //! vrpn_server: serves the devices of a vrpn.cfg file, with the C++ command line.
 
+#[path = "common/output.rs"]
+mod output;
+#[path = "common/signals.rs"]
+mod signals;
+
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::process::ExitCode;
 
 use vrpn::devices::base::set_print_threshold;
-use vrpn::server::{build_devices, config, parse_args, ServerLoop};
+use vrpn::server::config::{self, DeviceEntry};
+use vrpn::server::options::USAGE;
+use vrpn::server::{build_devices, parse_args, BuildNote, ServerCommand, ServerLoop};
 use vrpn::{Connection, TextSeverity};
 
-static STOP: AtomicBool = AtomicBool::new(false);
+use output::{errln, outln};
 
-extern "C" fn on_signal(_: i32) {
-    STOP.store(true, Ordering::Relaxed);
-}
+const PROGRAM: &str = "vrpn_server";
 
-fn install_signal_handlers() {
-    use nix::sys::signal::{sigaction, SaFlags, SigAction, SigHandler, SigSet, Signal};
-    let action = SigAction::new(
-        SigHandler::Handler(on_signal),
-        SaFlags::empty(),
-        SigSet::empty(),
-    );
-    for s in [Signal::SIGINT, Signal::SIGTERM] {
-        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
-        unsafe {
-            let _ = sigaction(s, &action);
-        }
-    }
-}
-
-fn main() {
+fn main() -> ExitCode {
     let opts = match parse_args(std::env::args().skip(1)) {
-        Ok(o) => o,
+        Ok(ServerCommand::Serve(o)) => o,
+        Ok(ServerCommand::Help) => {
+            outln!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
+        Ok(ServerCommand::Version) => {
+            outln!("{PROGRAM} {}", env!("CARGO_PKG_VERSION"));
+            return ExitCode::SUCCESS;
+        }
         Err(msg) => {
-            eprintln!("{msg}");
-            std::process::exit(2);
+            errln!("{PROGRAM}: {msg}");
+            return ExitCode::from(2);
         }
     };
-    install_signal_handlers();
+    signals::install();
     if opts.verbose {
         set_print_threshold(TextSeverity::Normal);
     }
-    let entries = match config::parse_file(Path::new(&opts.config)) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("vrpn_server: {e}");
-            std::process::exit(1);
-        }
+    let Some(entries) = read_config(&opts.config, opts.warn_only) else {
+        return ExitCode::from(1);
     };
+    // One name may serve several interfaces; the same interface twice under one name runs
+    // both (as C++ does) but deserves a warning.
+    for clash in config::name_clashes(&entries) {
+        errln!("{PROGRAM}: warning: {clash}");
+    }
     let conn = match Connection::server(opts.nic, opts.port) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("vrpn_server: {e}");
-            std::process::exit(1);
+            errln!("{PROGRAM}: {e}");
+            return ExitCode::from(1);
         }
     };
     // Logs open before the devices register, so their descriptions are logged (as C++).
@@ -63,24 +62,34 @@ fn main() {
                 conn.log_outgoing(path)
             };
             if let Err(e) = r {
-                eprintln!("vrpn_server: {path}: {e}");
-                std::process::exit(1);
+                errln!("{PROGRAM}: {path}: {e}");
+                return ExitCode::from(1);
             }
         }
     }
-    let devices = match build_devices(&entries, &conn, opts.warn_only, opts.verbose) {
+    let verbose = opts.verbose;
+    let devices = build_devices(&entries, &conn, opts.warn_only, |note| match note {
+        BuildNote::Opened { entry, name } if verbose => {
+            outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
+        }
+        BuildNote::Opened { .. } => {}
+        BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+    });
+    let devices = match devices {
         Ok(d) => d,
         Err(e) => {
-            eprintln!("vrpn_server: {e}");
-            std::process::exit(1);
+            errln!("{PROGRAM}: {e}");
+            return ExitCode::from(1);
         }
     };
-    if opts.verbose {
-        conn.on_notice(|n| println!("vrpn: {}", n.text));
+    if verbose {
+        conn.on_notice(|n| {
+            outln!("vrpn: {}", n.text);
+        });
     } else {
         conn.on_notice(|n| {
             if n.severity >= vrpn::Severity::Warning {
-                eprintln!("vrpn: {}", n.text)
+                errln!("vrpn: {}", n.text)
             }
         });
     }
@@ -88,21 +97,65 @@ fn main() {
     let nic = opts
         .nic
         .map_or("all interfaces".to_string(), |n| n.to_string());
-    println!(
-        "vrpn_server: serving {} device(s) from {} on port {port} ({nic})",
+    outln!(
+        "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
         devices.len(),
         opts.config
     );
     let mut server = ServerLoop::new(conn, devices, opts.sleep);
     server.quit_after_last(opts.quit_after_last);
     server.flush_logs_every_pass(opts.flush_logs);
-    let result = server.run(&STOP);
+    // Until a signal, `-q` and the last client leaving, or standard output closing (as a Unix
+    // tool ends when its reader goes away).
+    let result = loop {
+        if signals::stop_requested() || output::closed() {
+            break Ok(());
+        }
+        match server.pass() {
+            Ok(true) => {}
+            Ok(false) => break Ok(()),
+            Err(e) => break Err(e),
+        }
+        if let Err(e) = server.wait() {
+            break Err(e);
+        }
+    };
     // Close the logs (DISCONNECT entry, flush) before exiting.
     if let Err(e) = server.connection().close_logs() {
-        eprintln!("vrpn_server: {e}");
+        errln!("{PROGRAM}: {e}");
     }
     if let Err(e) = result {
-        eprintln!("vrpn_server: {e}");
-        std::process::exit(1);
+        errln!("{PROGRAM}: {e}");
+        return ExitCode::from(1);
+    }
+    match output::failure() {
+        Some(e) => {
+            errln!("{PROGRAM}: writing output: {e}");
+            ExitCode::from(1)
+        }
+        None => ExitCode::SUCCESS,
+    }
+}
+
+/// Reads the configuration file. Without `-warn` the first bad entry is fatal (`None`, after
+/// printing it); with `-warn` bad entries are printed and skipped, as C++ does.
+fn read_config(path: &str, warn_only: bool) -> Option<Vec<DeviceEntry>> {
+    let path = Path::new(path);
+    if !warn_only {
+        return config::parse_file(path)
+            .map_err(|e| errln!("{PROGRAM}: {e}"))
+            .ok();
+    }
+    match config::parse_file_lenient(path) {
+        Ok(report) => {
+            for e in &report.errors {
+                errln!("{PROGRAM}: {e}, skipped");
+            }
+            Some(report.entries)
+        }
+        Err(e) => {
+            errln!("{PROGRAM}: {e}");
+            None
+        }
     }
 }

@@ -746,18 +746,155 @@ fn error_bad_names() {
     );
 }
 
+// ---- names and interfaces ---------------------------------------------------------------------
+
+/// The (name, interface) pairs of every entry of `text`, in order.
+fn served(text: &str) -> Vec<(String, Interface)> {
+    parse(text)
+        .iter()
+        .flat_map(|e| {
+            e.config
+                .served()
+                .into_iter()
+                .map(|s| (s.name.to_owned(), s.interface))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The warnings `text` gives.
+fn clashes(text: &str) -> Vec<String> {
+    name_clashes(&parse(text))
+        .iter()
+        .map(ToString::to_string)
+        .collect()
+}
+
 #[test]
-fn error_duplicate_names() {
+fn every_keyword_declares_its_interfaces() {
+    use Interface::*;
+    let cases: [(&str, &[Interface]); 16] = [
+        ("vrpn_Tracker_NULL D 1 1\n", &[Tracker]),
+        ("vrpn_Tracker_Spin D 1 30 0 1 0 1\n", &[Tracker]),
+        ("vrpn_Button_Example D 2 2\n", &[Button]),
+        ("vrpn_Dial_Example D 1 1 1\n", &[Dial]),
+        ("vrpn_Analog_Example D 2 2\n", &[Analog]),
+        ("vrpn_Text_Example D 1 hello\n", &[Text]),
+        ("vrpn_Tracker_AnalogFly D 60 absolute\n\n", &[Tracker]),
+        ("vrpn_Tracker_ButtonFly D 60\nend\n", &[Tracker]),
+        ("vrpn_Joylin D /dev/input/js0\n", &[Analog, Button]),
+        ("vrpn_Tracker_Fastrak D /dev/ttyS0 9600\n", &[Tracker]),
+        ("vrpn_Tracker_InterSense D AUTO\n", &[Tracker]),
+        ("vrpn_Tracker_Flock D 1 /dev/ttyS0 9600 0\n", &[Tracker]),
+        (
+            "vrpn_Tracker_Flock_Parallel D 1 /dev/ttyS0 9600 0 /dev/ttyS1\n",
+            &[Tracker],
+        ),
+        ("vrpn_Magellan D /dev/ttyS0 9600\n", &[Analog, Button]),
+        (
+            "vrpn_CerealBox D /dev/ttyS0 19200 1 1 1\n",
+            &[Button, Analog, Dial],
+        ),
+        ("vrpn_Tracker_Dyna D 1 /dev/ttyS0 19200\n", &[Tracker]),
+    ];
+    for (text, want) in cases {
+        let want: Vec<_> = want.iter().map(|&i| ("D".to_owned(), i)).collect();
+        assert_eq!(served(text), want, "{text}");
+    }
+    assert!(served("vrpn_Nothing D 1\n").is_empty());
+}
+
+#[test]
+fn station_devices_serve_under_their_own_names() {
+    use Interface::*;
+    let text = "\
+vrpn_Tracker_Fastrak F /dev/ttyS0 115200 /
+Wand W 0 -1 0 0 1 -1 0 0 1 /
+Stylus S 1
+";
+    let want = [
+        ("F".to_owned(), Tracker),
+        ("W".to_owned(), Button),
+        ("W".to_owned(), Analog),
+        ("S".to_owned(), Button),
+    ];
+    assert_eq!(served(text), want);
+    assert!(clashes(text).is_empty());
+}
+
+#[test]
+fn one_name_for_several_interfaces_is_allowed() {
+    // Factoring, as C++ allows: Dev0 is a tracker and a button.
+    let text = "vrpn_Tracker_NULL Dev0 1 20.0\nvrpn_Button_Example Dev0 2 4.0\n";
+    assert_eq!(parse(text).len(), 2);
+    assert!(clashes(text).is_empty());
+    // A tracker whose stylus and wand share its name: tracker, button, analog.
+    let text = "vrpn_Tracker_Fastrak F COM1 115200 /\nStylus F 0\n";
+    assert_eq!(parse(text).len(), 1);
+    assert!(clashes(text).is_empty());
+    let text = "vrpn_Tracker_Fastrak F COM1 115200 /\nWand F 0 -1 0 0 1 -1 0 0 1\n";
+    assert!(clashes(text).is_empty());
+    // Every interface of the example devices under one name.
+    let text = "\
+vrpn_Tracker_NULL D 1 1
+vrpn_Button_Example D 2 2
+vrpn_Analog_Example D 2 2
+vrpn_Dial_Example D 1 1 1
+vrpn_Text_Example D 1 hi
+";
+    assert_eq!(parse(text).len(), 5);
+    assert!(clashes(text).is_empty());
+}
+
+#[test]
+fn same_interface_under_one_name_is_a_warning_naming_both_lines() {
+    let text = "vrpn_Tracker_NULL Tracker0 1 1\n\nvrpn_Tracker_Spin Tracker0 1 30 0 1 0 1\n";
+    assert_eq!(parse(text).len(), 2, "both entries are kept, as in C++");
     assert_eq!(
-        err("vrpn_Tracker_NULL Tracker0 1 1\n\nvrpn_Tracker_Spin Tracker0 1 30 0 1 0 1\n"),
-        "vrpn.cfg:3: vrpn_Tracker_Spin: device name 'Tracker0' is already used by \
-         vrpn_Tracker_NULL at line 1; give every device its own name"
+        clashes(text),
+        [
+            "vrpn.cfg:3: vrpn_Tracker_Spin: device name 'Tracker0' is already a tracker \
+          (vrpn_Tracker_NULL at line 1); both run and their reports interleave under one \
+          name, as in C++ VRPN: give each its own name"
+        ]
     );
+    let clash = &name_clashes(&parse(text))[0];
     assert_eq!(
-        err("vrpn_Tracker_Fastrak F COM1 115200 /\nStylus F 0\n"),
-        "vrpn.cfg:1: vrpn_Tracker_Fastrak: device name 'F' is already used by this same \
-         entry; give every device its own name"
+        (
+            clash.name.as_str(),
+            clash.interface,
+            clash.first.line,
+            clash.second.line
+        ),
+        ("Tracker0", Interface::Tracker, 1, 3)
     );
+    // A Joylin is a button too, so a button example under its name clashes; a tracker does not.
+    let text = "vrpn_Joylin J /dev/input/js0\nvrpn_Tracker_NULL J 1 1\nvrpn_Button_Example J 2 2\n";
+    assert_eq!(
+        clashes(text),
+        [
+            "vrpn.cfg:3: vrpn_Button_Example: device name 'J' is already a button (vrpn_Joylin \
+          at line 1); both run and their reports interleave under one name, as in C++ VRPN: \
+          give each its own name"
+        ]
+    );
+    // Two styluses of one tracker under one name.
+    let text = "vrpn_Tracker_Fastrak F COM1 115200 /\nStylus S 0 /\nStylus S 1\n";
+    assert_eq!(
+        clashes(text),
+        [
+            "vrpn.cfg:1: vrpn_Tracker_Fastrak: device name 'S' is already a button (earlier in \
+          this same entry); both run and their reports interleave under one name, as in C++ \
+          VRPN: give each its own name"
+        ]
+    );
+    // Three alike: each later one is reported against the first.
+    let text = "vrpn_Tracker_NULL T 1 1\nvrpn_Tracker_NULL T 1 1\nvrpn_Tracker_NULL T 1 1\n";
+    let lines: Vec<_> = name_clashes(&parse(text))
+        .iter()
+        .map(|c| (c.first.line, c.second.line))
+        .collect();
+    assert_eq!(lines, [(1, 2), (1, 3)]);
 }
 
 #[test]
@@ -915,8 +1052,12 @@ vrpn_Button_Example B0 2 2
 ";
     let report = parse_str_lenient(text, "vrpn.cfg");
     let errors: Vec<_> = report.errors.iter().map(|e| e.line()).collect();
-    // Line 2: bad number; line 4: bad axis line; line 7: duplicate name.
-    assert_eq!(errors, [Some(2), Some(4), Some(7)]);
+    // Line 2: bad number; line 4: bad axis line. Line 7 reuses T0 for a second tracker: kept,
+    // and only a warning.
+    assert_eq!(errors, [Some(2), Some(4)]);
+    let clashes = name_clashes(&report.entries);
+    assert_eq!(clashes.len(), 1);
+    assert_eq!((clashes[0].first.line, clashes[0].second.line), (1, 7));
     let kws: Vec<_> = report
         .entries
         .iter()
@@ -928,6 +1069,7 @@ vrpn_Button_Example B0 2 2
         [
             (1, "vrpn_Tracker_NULL"),
             (5, "Y"),
+            (7, "vrpn_Tracker_NULL"),
             (8, "vrpn_Button_Example")
         ]
     );

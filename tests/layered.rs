@@ -506,7 +506,7 @@ fn config_round_trip_with_local_and_remote_sources() {
          end\n"
     );
     let entries = parse_str(&cfg, "vrpn.cfg").unwrap();
-    let mut devices = build_devices(&entries, &srv_b, false, false).unwrap();
+    let mut devices = build_devices(&entries, &srv_b, false, |_| {}).unwrap();
     let names: Vec<_> = devices.iter().map(|d| d.name().to_string()).collect();
     assert_eq!(names, ["FlyA", "FlyB", "BFly"]);
 

@@ -10,32 +10,49 @@ use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
 use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
 
-/// Builds the devices `entries` describe on `conn`, in file order.
+/// What [`build_devices`] has to say about an entry, for the program to print.
+#[derive(Debug)]
+pub enum BuildNote<'a> {
+    /// A device was created (`vrpn_server -v` prints these).
+    Opened {
+        /// The entry it came from.
+        entry: &'a DeviceEntry,
+        /// The device's name.
+        name: &'a str,
+    },
+    /// With `warn_only`, an entry that could not be built and was left out (C++ `-warn`
+    /// prints the problem and goes on).
+    Skipped {
+        /// The entry.
+        entry: &'a DeviceEntry,
+        /// Why, naming the file and line.
+        error: String,
+    },
+}
+
+/// Builds the devices `entries` describe on `conn`, in file order, telling `note` about each.
 ///
 /// An entry that cannot be served (unknown keyword, a device not implemented yet, a constructor
 /// failure) is an error naming the file and line; with `warn_only` (`vrpn_server -warn`) it is
-/// printed and skipped instead, as C++ does.
+/// reported as [`BuildNote::Skipped`] and left out instead, as C++ does. Entries sharing a
+/// name are all built (see [`super::config::name_clashes`] for the ones worth a warning).
 pub fn build_devices(
     entries: &[DeviceEntry],
     conn: &Connection,
     warn_only: bool,
-    verbose: bool,
+    mut note: impl FnMut(BuildNote<'_>),
 ) -> Result<Vec<Box<dyn ServerDevice>>, String> {
     let mut devices: Vec<Box<dyn ServerDevice>> = Vec::new();
     for entry in entries {
         match build_one(entry, conn) {
             Ok(dev) => {
-                if verbose {
-                    println!(
-                        "Opening {}: {} ({})",
-                        entry.keyword,
-                        dev.name(),
-                        entry.location
-                    );
-                }
+                note(BuildNote::Opened {
+                    entry,
+                    name: dev.name(),
+                });
                 devices.push(dev);
             }
-            Err(e) if warn_only => eprintln!("vrpn_server: {e}, skipped"),
+            Err(error) if warn_only => note(BuildNote::Skipped { entry, error }),
             Err(e) => return Err(e),
         }
     }

@@ -1,4 +1,4 @@
-//! The `vrpn_server` command line, with the C++ meanings (CONFIG.md §1).
+//! The `vrpn_server` command line, with the C++ single-dash spellings and meanings.
 
 use std::net::Ipv4Addr;
 use std::time::Duration;
@@ -64,9 +64,21 @@ impl Default for ServerOptions {
     }
 }
 
+/// What a `vrpn_server` command line asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ServerCommand {
+    /// Serve with these options.
+    Serve(ServerOptions),
+    /// Print [`USAGE`] (`-h`, `-help`, `--help`).
+    Help,
+    /// Print the version (`--version`).
+    Version,
+}
+
 /// Usage text.
 pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millisleep N] \
 [-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [PORT]
+       vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
   -v              verbose: print each device opened and show every text message
@@ -77,17 +89,19 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millis
   -li FILE        log incoming messages to FILE
   -lo FILE        log outgoing messages to FILE
   -flush          flush logs on every pass
-  PORT            UDP and TCP port to listen on (default 3883)";
+  PORT            UDP and TCP port to listen on (default 3883; 0 picks a free one)
+  -h, --help      print this help
+  --version       print the version";
 
-/// Parses arguments (without the program name). `Err` carries a message for the user.
-pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerOptions, String> {
+/// Parses arguments (without the program name). `Err` carries a one-line message for the user.
+pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerCommand, String> {
     let mut o = ServerOptions::default();
     let mut it = args.into_iter();
     let mut port_seen = false;
     while let Some(a) = it.next() {
         let mut value = |flag: &str| {
             it.next()
-                .ok_or_else(|| format!("{flag} needs a value\n{USAGE}"))
+                .ok_or_else(|| format!("{flag} needs a value (see vrpn_server -h)"))
         };
         match a.as_str() {
             "-f" => o.config = value("-f")?,
@@ -117,11 +131,14 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerOptio
                     }
                 };
             }
-            "-h" | "--help" | "-help" => return Err(USAGE.to_string()),
-            s if s.starts_with('-') => return Err(format!("unknown option {s}\n{USAGE}")),
+            "-h" | "--help" | "-help" => return Ok(ServerCommand::Help),
+            "--version" => return Ok(ServerCommand::Version),
+            s if s.starts_with('-') => {
+                return Err(format!("unknown option {s} (see vrpn_server -h)"))
+            }
             s => {
                 if port_seen {
-                    return Err(format!("unexpected argument {s:?}\n{USAGE}"));
+                    return Err(format!("unexpected argument {s:?} (see vrpn_server -h)"));
                 }
                 port_seen = true;
                 o.port = s
@@ -130,7 +147,7 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerOptio
             }
         }
     }
-    Ok(o)
+    Ok(ServerCommand::Serve(o))
 }
 
 #[cfg(test)]
@@ -141,24 +158,33 @@ mod tests {
         s.split_whitespace().map(str::to_string).collect()
     }
 
+    /// The options of a command line that must parse to `Serve`.
+    fn serve(s: &str) -> ServerOptions {
+        match parse_args(args(s)) {
+            Ok(ServerCommand::Serve(o)) => o,
+            other => panic!("{s}: {other:?}"),
+        }
+    }
+
     #[test]
     fn cpp_options() {
-        let o = parse_args(args(
-            "-f x.cfg -warn -v -q -millisleep 5 -NIC 127.0.0.1 4000",
-        ))
-        .unwrap();
+        let o = serve("-f x.cfg -warn -v -q -millisleep 5 -NIC 127.0.0.1 4000 -li in.vrpn -lo out.vrpn -flush");
         assert_eq!(o.config, "x.cfg");
         assert!(o.warn_only && o.verbose && o.quit_after_last);
         assert_eq!(o.nic, Some(Ipv4Addr::LOCALHOST));
         assert_eq!(o.port, 4000);
+        assert_eq!(o.log_in.as_deref(), Some("in.vrpn"));
+        assert_eq!(o.log_out.as_deref(), Some("out.vrpn"));
+        assert!(o.flush_logs);
         assert!(
             matches!(o.sleep, SleepPolicy::EventDriven { max_block, .. } if max_block == Duration::from_millis(5))
         );
-        assert_eq!(
-            parse_args(args("-millisleep -1")).unwrap().sleep,
-            SleepPolicy::Spin
-        );
-        assert_eq!(parse_args(args("")).unwrap(), ServerOptions::default());
+        assert_eq!(serve("-millisleep -1").sleep, SleepPolicy::Spin);
+        assert_eq!(serve(""), ServerOptions::default());
+        for help in ["-h", "-help", "--help", "-v -h"] {
+            assert_eq!(parse_args(args(help)), Ok(ServerCommand::Help));
+        }
+        assert_eq!(parse_args(args("--version")), Ok(ServerCommand::Version));
     }
 
     #[test]
@@ -168,8 +194,8 @@ mod tests {
             .unwrap_err()
             .contains("needs a value"));
         assert!(parse_args(args("abc")).unwrap_err().contains("port"));
-        assert!(parse_args(args("-bogus"))
-            .unwrap_err()
-            .contains("unknown option"));
+        let e = parse_args(args("-bogus")).unwrap_err();
+        assert_eq!(e, "unknown option -bogus (see vrpn_server -h)");
+        assert!(!e.contains('\n'));
     }
 }

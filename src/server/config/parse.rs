@@ -1,0 +1,169 @@
+//! The top level of `vrpn.cfg`: reading a file, dispatching each entry to its parser, strict
+//! (default) and lenient (`-warn`) parsing.
+
+use std::path::Path;
+
+use super::devices::*;
+use super::entry::{DeviceConfig, DeviceEntry, ParseReport};
+use super::error::{ConfigError, ConfigErrorKind, Ctx, SourceLocation};
+use super::fastrak::{parse_fastrak, parse_intersense};
+use super::fly::{parse_analog_fly, parse_button_fly};
+use super::lines::{classify_line, EntryTokens, LineClass, RawLine, Reader};
+use super::{kw, KNOWN_KEYWORDS};
+
+/// Parses the entry whose first line is `line`, reading block lines from `reader`.
+fn parse_entry(
+    file: &str,
+    line: RawLine<'_>,
+    tokens: &EntryTokens<'_>,
+    reader: &mut Reader<'_>,
+) -> Result<DeviceEntry, ConfigError> {
+    let ctx = Ctx::new(file, line.number, tokens.keyword);
+    let a = &tokens.args[..];
+    let known = KNOWN_KEYWORDS.contains(&tokens.keyword);
+    let config = if !known || (!tokens.matchable && !a.is_empty()) {
+        // C++ prints "Unknown Device" for it. A known keyword alone on its line is also
+        // "unknown" to C++; it falls through to the argument-count error below instead.
+        DeviceConfig::Unknown {
+            keyword: tokens.keyword.to_owned(),
+            args: a.iter().map(|s| (*s).to_owned()).collect(),
+        }
+    } else {
+        match tokens.keyword {
+            kw::TRACKER_NULL => parse_tracker_null(&ctx, a)?,
+            kw::TRACKER_SPIN => parse_tracker_spin(&ctx, a)?,
+            kw::BUTTON_EXAMPLE => parse_button_example(&ctx, a)?,
+            kw::DIAL_EXAMPLE => parse_dial_example(&ctx, a)?,
+            kw::ANALOG_EXAMPLE => parse_analog_example(&ctx, a)?,
+            kw::TEXT_EXAMPLE => parse_text_example(&ctx, a, tokens.rest)?,
+            kw::ANALOG_FLY => parse_analog_fly(&ctx, a, reader)?,
+            kw::BUTTON_FLY => parse_button_fly(&ctx, a, reader)?,
+            kw::JOYLIN => parse_joylin(&ctx, a)?,
+            kw::FASTRAK => parse_fastrak(&ctx, tokens.rest, reader)?,
+            kw::INTERSENSE => parse_intersense(&ctx, tokens.rest, reader)?,
+            kw::FLOCK => parse_flock(&ctx, a)?,
+            kw::FLOCK_PARALLEL => parse_flock_parallel(&ctx, a)?,
+            kw::MAGELLAN => parse_magellan(&ctx, a)?,
+            kw::CEREALBOX => parse_cerealbox(&ctx, a)?,
+            _ => parse_dyna(&ctx, a)?,
+        }
+    };
+    Ok(DeviceEntry {
+        location: SourceLocation {
+            file: file.to_owned(),
+            line: line.number,
+        },
+        last_line: reader.last_number.max(line.number),
+        keyword: tokens.keyword.to_owned(),
+        args: a.iter().map(|s| (*s).to_owned()).collect(),
+        config,
+    })
+}
+
+/// The shared loop of [`parse_str`] and [`parse_str_lenient`].
+fn parse_all(text: &str, file: &str, stop_at_first_error: bool) -> ParseReport {
+    let mut report = ParseReport::default();
+    let mut reader = Reader::new(text, file);
+    while let Some(next) = reader.next_raw() {
+        let result = next.and_then(|line| match classify_line(line.text) {
+            LineClass::Entry(tokens) => parse_entry(file, line, &tokens, &mut reader).map(Some),
+            LineClass::Short | LineClass::Comment => Ok(None),
+        });
+        match result {
+            Ok(Some(entry)) => report.entries.push(entry),
+            Ok(None) => {}
+            Err(e) => {
+                report.errors.push(e);
+                if stop_at_first_error {
+                    break;
+                }
+            }
+        }
+    }
+    report
+}
+
+/// Parses `vrpn.cfg` text; `file_name` is used in locations and messages.
+///
+/// Stops at the first malformed entry, like C++ `vrpn_server` without `-warn`. Unknown
+/// keywords are returned as [`DeviceConfig::Unknown`] entries for the caller to refuse (C++
+/// default) or skip with a warning (`-warn`), see [`DeviceEntry::unknown_error`].
+pub fn parse_str(text: &str, file_name: &str) -> Result<Vec<DeviceEntry>, ConfigError> {
+    let mut report = parse_all(text, file_name, true);
+    match report.errors.pop() {
+        Some(e) => Err(e),
+        None => Ok(report.entries),
+    }
+}
+
+/// Parses `vrpn.cfg` text the way C++ `vrpn_server -warn` does: a malformed entry is recorded
+/// in [`ParseReport::errors`] and skipped, and parsing resumes at the next unread line.
+pub fn parse_str_lenient(text: &str, file_name: &str) -> ParseReport {
+    parse_all(text, file_name, false)
+}
+
+/// Reads a configuration file as UTF-8 text; errors name the file (and the line of the first
+/// invalid byte).
+pub fn read_config_text(path: &Path) -> Result<String, ConfigError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| {
+        ConfigError::whole_file(
+            ConfigErrorKind::Io,
+            &file,
+            format!("cannot read configuration file: {e}"),
+        )
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let good = &bytes[..e.utf8_error().valid_up_to()];
+        let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = good.len() - good.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1) + 1;
+        let byte = bytes.get(good.len()).copied().unwrap_or_default();
+        ConfigError::at_line(
+            ConfigErrorKind::NotUtf8,
+            &file,
+            line,
+            format!(
+                "the file is not UTF-8 text (byte 0x{byte:02X} at column {column}); save it as \
+                 UTF-8 or plain ASCII"
+            ),
+        )
+    })
+}
+
+/// Reads and parses a `vrpn.cfg` file with [`parse_str`]'s rules; the path names the file in
+/// messages.
+pub fn parse_file(path: &Path) -> Result<Vec<DeviceEntry>, ConfigError> {
+    let text = read_config_text(path)?;
+    parse_str(&text, &path.display().to_string())
+}
+
+/// Reads and parses a `vrpn.cfg` file with [`parse_str_lenient`]'s rules (`-warn`). Only an
+/// unreadable file is an error.
+pub fn parse_file_lenient(path: &Path) -> Result<ParseReport, ConfigError> {
+    let text = read_config_text(path)?;
+    Ok(parse_str_lenient(&text, &path.display().to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::server::config::parse_tracker_cfg;
+
+    #[test]
+    fn no_panic_on_odd_bytes() {
+        for text in [
+            "\u{0}\u{0}\u{0}\n",
+            "vrpn_Tracker_Fastrak\\",
+            "vrpn_Tracker_Fastrak a b 9600 \\",
+            "vrpn_Tracker_Fastrak a b 9600 /\n/\n",
+            "vrpn_Tracker_AnalogFly a 1 absolute",
+            "vrpn_Tracker_ButtonFly a 1\n\n",
+            "\u{feff}\u{feff}\u{feff}",
+            "vrpn_Text_Example é 1 ü",
+        ] {
+            let _ = parse_str_lenient(text, "x");
+            let _ = parse_tracker_cfg(text, "x", "a");
+        }
+    }
+}
