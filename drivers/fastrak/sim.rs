@@ -267,9 +267,7 @@ impl FastrakSim {
         self.continuous = false;
         self.binary = false;
         self.lists = [OutputList::new(&DEFAULT_LIST); MAX_STATIONS];
-        self.tx.clear();
-        self.marks.clear();
-        self.status_due = None;
+        self.drop_output();
         self.next_cycle = None;
         self.rx_line.clear();
         self.clock_zero = None;
@@ -333,6 +331,14 @@ impl FastrakSim {
             reply.extend_from_slice(b"\r\n");
             self.enqueue(&reply, now + self.cfg.reply_delay);
         }
+    }
+
+    /// Loses everything not yet sent.
+    fn drop_output(&mut self) {
+        self.tx.clear();
+        self.marks.clear();
+        self.emitted = self.enqueued;
+        self.status_due = None;
     }
 
     fn enqueue(&mut self, bytes: &[u8], at: Instant) {
@@ -467,9 +473,7 @@ impl DeviceModel for FastrakSim {
         let now = now.mono;
         self.power_on.get_or_insert(now);
         if self.silent {
-            self.tx.clear();
-            self.marks.clear();
-            self.status_due = None;
+            self.drop_output();
             return;
         }
         if let Some(t) = self.reboot_until {
