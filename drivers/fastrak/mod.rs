@@ -34,8 +34,10 @@
 //! `vrpn_Tracker Pos_Quat` (LOW_LATENCY): sensor = station − 1, position in metres (the
 //! tracker's inches × 0.0254), quaternion x, y, z, w as received. All three carry the record's
 //! time: the arrival of its first byte at the port or, with IS-900 timestamps, the tracker's
-//! clock zero plus the record's milliseconds. Resets, time-outs and resynchronisations are
-//! reported as text messages from the tracker's name.
+//! clock zero plus the record's milliseconds. (C++ stamps the button messages with time zero
+//! and the analog message with the time it is sent; a client sees the same messages, with a
+//! useful time.) Resets, time-outs and resynchronisations are reported as text messages from
+//! the tracker's name.
 //!
 //! # Supervision
 //!

@@ -22,6 +22,8 @@
 //!    [`BARRIER_TIMEOUT`] starts attempt n + 1;
 //! 7. `f` (binary output), with IS-900 timestamps `MT\r` (milliseconds) and `MZ\r` (zero the
 //!    clock, whose host time becomes the tracker's time zero), then `C` (continuous output).
+//!    C++ zeroes the clock after `C`, so its first records count from the old zero; zeroing
+//!    first gives every record a time on the new one.
 //!
 //! C++ blocks the whole server with fixed sleeps instead: 2 s after every break byte, 20 s
 //! after Ctrl-Y, 2 s before and 1 s after the status request, 1 s after each filter command

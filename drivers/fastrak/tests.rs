@@ -865,3 +865,83 @@ fn in_process_delivery_needs_no_mainloop() {
     assert!(rig.pose_count() > n);
     rig.conn.mainloop().unwrap();
 }
+
+#[test]
+fn reset_commands_then_station_devices_with_is900_time() {
+    // `IS900time\` is both the option and the start of the reset commands; the last reset
+    // line ends in `/` to start the station devices.
+    let text = "vrpn_Tracker_Fastrak Isense900 /dev/ttyS0 115200 IS900time\\\n\
+                MCc/\n\
+                Stylus Pen 3\n";
+    let cfg = fastrak_cfg(text);
+    assert!(cfg.is900_timestamps);
+    let mut rig = rig(text, &["Pen"], SimConfig::new(115_200), 17);
+    rig.start_up();
+    rig.line.run_for(Duration::from_secs(1));
+    let d = &rig.line.device;
+    assert!(d.commands.iter().any(|c| c == "MCc"));
+    assert_eq!(d.output_list(4), [2, 11, 21, 22, 0]);
+    let zero = rig.line.driver.clock_zero().unwrap();
+    let time_of = |r: &SentRecord| {
+        TimeVal::from_micros(zero.as_micros() + is900_offset(r.device_ms).as_micros())
+    };
+    let poses = rig.poses();
+    let log = rig.binary_log();
+    for (p, r) in poses.iter().zip(&log) {
+        assert_eq!(actual(p), expected_pose(r, time_of(r)));
+    }
+    let changes: Vec<Seen> = rig
+        .seen
+        .borrow()
+        .iter()
+        .filter(|s| matches!(s, Seen::Button(..)))
+        .cloned()
+        .collect();
+    let want = expected_changes(
+        "Pen",
+        &log[..poses.len()],
+        4,
+        2,
+        |s| sim::buttons(4, s),
+        time_of,
+    );
+    assert_eq!(changes, want);
+    assert!(!changes.is_empty());
+}
+
+#[test]
+fn a_wand_beside_a_fastrak_stylus_uses_the_stylus_button_format() {
+    // As in C++, one FTStylus line switches every station's buttons to the Fastrak format.
+    let text = "vrpn_Tracker_Fastrak T /dev/ttyS0 115200 /\n\
+                Wand W 0 -1 0 0 1 -1 0 0 1 /\n\
+                FTStylus S 1\n";
+    let mut rig = rig(text, &["W", "S"], SimConfig::new(115_200), 18);
+    rig.start_up();
+    rig.line.run_for(Duration::from_secs(1));
+    assert_eq!(rig.line.device.output_list(1), [2, 11, 16, 23, 0]);
+    assert_eq!(rig.line.device.output_list(2), [2, 11, 16, 0]);
+    let n = assert_exact_stream(&rig);
+    let log = rig.binary_log();
+    let wand: Vec<Seen> = rig
+        .seen
+        .borrow()
+        .iter()
+        .filter(|s| matches!(s, Seen::Button("W", ..)))
+        .cloned()
+        .collect();
+    let want = expected_changes(
+        "W",
+        &log[..n],
+        1,
+        1,
+        |s| u8::from(sim::stylus(1, s)),
+        |r| rig.arrival(r),
+    );
+    assert_eq!(wand, want);
+    assert!(!wand.is_empty());
+    assert!(rig
+        .seen
+        .borrow()
+        .iter()
+        .any(|s| matches!(s, Seen::Analog("W", ..))));
+}
