@@ -3,3 +3,5 @@
 //!
 //! [`SerialDriver`]: crate::serial::SerialDriver
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
+
+pub mod fastrak;

@@ -1,0 +1,143 @@
+//! The Fastrak driver reports records without allocating: checked with a counting global
+//! allocator around every driver call while an IS-900 with a wand and a stylus streams
+//! through it (pose, button and analog paths, split reads) on a virtual serial line.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig};
+use vrpn::drivers::fastrak::FastrakDriver;
+use vrpn::serial::testing::VirtualLine;
+use vrpn::serial::{PortKind, PortOps, SerialDriver};
+use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::{AnalogRemote, ButtonRemote, Connection, Now, TimeVal, TrackerRemote};
+
+struct Counting;
+
+thread_local! {
+    static ENABLED: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<u64> = const { Cell::new(0) };
+}
+
+fn note_alloc() {
+    if ENABLED.try_with(Cell::get).unwrap_or(false) {
+        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc(layout)
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc_zeroed(layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_alloc();
+        System.realloc(ptr, layout, new_size)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Counts allocations made inside the wrapped driver's calls only (the simulator and the
+/// virtual line allocate freely).
+struct Counted(FastrakDriver);
+
+fn counted<T>(f: impl FnOnce() -> T) -> T {
+    ENABLED.with(|e| e.set(true));
+    let out = f();
+    ENABLED.with(|e| e.set(false));
+    out
+}
+
+impl SerialDriver for Counted {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn port_kind(&self) -> PortKind {
+        self.0.port_kind()
+    }
+    fn opened(&mut self, now: Now, port: &mut PortOps) {
+        self.0.opened(now, port)
+    }
+    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
+        counted(|| self.0.received(bytes, arrived, port))
+    }
+    fn poll(&mut self, now: Now, port: &mut PortOps) {
+        counted(|| self.0.poll(now, port))
+    }
+    fn next_deadline(&self) -> Option<Instant> {
+        self.0.next_deadline()
+    }
+    fn closed(&mut self, now: Now) {
+        self.0.closed(now)
+    }
+}
+
+#[test]
+fn streaming_records_allocates_nothing() {
+    let text = "vrpn_Tracker_Fastrak Isense900 /dev/ttyS1 115200 IS900time /\n\
+                Wand Wand0 0 -1.0 0.0 0.0 1.0 -1.0 0.0 0.0 1.0 /\n\
+                Stylus Stylus0 2\n";
+    let DeviceConfig::Fastrak(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
+        panic!("not a Fastrak entry");
+    };
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let conn = Connection::new_loopback();
+    let driver = FastrakDriver::new(&cfg, &conn).unwrap();
+    let tracker = TrackerRemote::on_connection("Isense900", &conn).unwrap();
+    let wand_buttons = ButtonRemote::on_connection("Wand0", &conn).unwrap();
+    let wand_analog = AnalogRemote::on_connection("Wand0", &conn).unwrap();
+    let stylus = ButtonRemote::on_connection("Stylus0", &conn).unwrap();
+    let (poses, changes, analogs) = (
+        Rc::new(Cell::new(0u64)),
+        Rc::new(Cell::new(0u64)),
+        Rc::new(Cell::new(0u64)),
+    );
+    let p = poses.clone();
+    tracker.on_pose(move |_| p.set(p.get() + 1));
+    let c = changes.clone();
+    wand_buttons.on_change(move |_| c.set(c.get() + 1));
+    let c = changes.clone();
+    stylus.on_change(move |_| c.set(c.get() + 1));
+    let a = analogs.clone();
+    wand_analog.on_report(move |_| a.set(a.get() + 1));
+
+    let start = Now {
+        mono: Instant::now(),
+        wall: TimeVal::new(1_700_000_000, 0),
+    };
+    let mut line = VirtualLine::new(
+        Counted(driver),
+        FastrakSim::new(SimConfig::new(115_200)),
+        start,
+        3,
+    );
+    line.split_reads = true;
+    // Reset, then a second of streaming to warm every path up.
+    line.run_for(Duration::from_millis(1500));
+    assert!(line.driver.0.is_streaming());
+    COUNT.with(|c| c.set(0));
+    let before = (poses.get(), changes.get(), analogs.get());
+    line.run_for(Duration::from_secs(5));
+    let allocations = COUNT.with(Cell::get);
+    let poses = poses.get() - before.0;
+    let changes = changes.get() - before.1;
+    let analogs = analogs.get() - before.2;
+    assert!(poses > 1000, "{poses} poses");
+    assert!(changes > 50, "{changes} button changes");
+    assert!(analogs > 200, "{analogs} analog reports");
+    assert_eq!(
+        allocations, 0,
+        "allocations while streaming {poses} records"
+    );
+}
