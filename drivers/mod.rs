@@ -3,3 +3,4 @@
 //!
 //! [`SerialDriver`]: crate::serial::SerialDriver
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
+pub mod flock;
