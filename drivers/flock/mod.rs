@@ -1,5 +1,5 @@
 //! Ascension Flock of Birds: every receiver on the master bird's serial line
-//! ([`FlockDriver`]), or one serial line per receiver (parallel); sans-IO drivers and a
+//! ([`FlockDriver`]), or one serial line per receiver ([`parallel`]); sans-IO drivers and a
 //! device simulator ([`sim`]).
 //!
 //! # Configuration lines served
@@ -47,10 +47,13 @@
 
 pub mod framer;
 mod notes;
+pub mod parallel;
 pub mod record;
 pub mod reset;
 pub mod sim;
 
+#[cfg(test)]
+mod parallel_tests;
 #[cfg(test)]
 mod tests;
 
@@ -65,6 +68,8 @@ use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
 use crate::server::config;
 use crate::time::Now;
 use crate::{Connection, Error, TrackerServer};
+
+pub use self::parallel::FlockParallelPort;
 
 /// Longest gap without a record before the Flock is declared failed and reset (as C++).
 pub const WATCHDOG: Duration = Duration::from_secs(2);
