@@ -1,5 +1,5 @@
 //! The reset of a Flock through its master bird's serial line, as a state machine over
-//! deadlines, and the error query a failed Flock is asked.
+//! deadlines, and the query that asks a failed Flock for its error code.
 //!
 //! # Commands used
 //!
@@ -32,8 +32,9 @@
 //!    [`AUTOCONFIG_PAUSE`] later, discard the input and ask for the system status. The Flock's
 //!    manual asks for 300 ms of silence before and after the auto-configuration.
 //! 4. Every unit (the receivers, and the extended-range controller when present) must be
-//!    accessible and running. A short or unhappy answer is asked again until
-//!    [`AUTOCONFIG_LIMIT`] after the auto-configuration, then the reset fails.
+//!    accessible and running. After a short answer, or one showing a unit not yet up, the
+//!    status is asked for again, until [`AUTOCONFIG_LIMIT`] after the auto-configuration;
+//!    then the reset fails.
 //! 5. Send group mode on, the position/quaternion format and the hemisphere to every receiver
 //!    (forwarded by address), and ask for the crystal speed and the measurement-rate count
 //!    (answered within [`REPLY_WAIT`], or the rate stays unknown: not a failure).

@@ -1,5 +1,6 @@
 //! A virtual serial line for tests: a [`SerialDriver`] on one end, a [`DeviceModel`] (a device
-//! simulator) on the other, both on a virtual clock, with faults on demand.
+//! simulator) on the other, both on a virtual clock, with faults on demand. [`VirtualLines`]
+//! runs several such lines on one clock, for devices whose ports cooperate.
 //!
 //! Nothing here sleeps or reads a clock, so a test runs a device through its whole reset
 //! sequence, a watchdog time-out and a reopen in microseconds of real time, and the same seed
