@@ -648,3 +648,29 @@ fn records_cut_anywhere_carry_the_time_of_their_first_read() {
     let expected = pose(3, 1).expected_position_m(Transmitter::ExtendedRange);
     assert_eq!([poses[1].pos.x, poses[1].pos.y, poses[1].pos.z], expected);
 }
+
+#[test]
+fn line_gone_quiet_fails_resets_until_it_returns() {
+    // Everything the device sends is lost for 4 s (a loose connector): the watchdog fires,
+    // the resets find no answer, and once the line works again the Flock streams.
+    let mut r = rig(FOUR_ERT, |_| {}, 41);
+    r.run_to_streaming(Duration::from_secs(5));
+    r.line.run_for(Duration::from_millis(100));
+    r.line.silent = true;
+    r.line.run_for(Duration::from_secs(4));
+    assert_eq!(r.texts_with("Tracker failed to read"), 1);
+    assert!(!r.line.driver.is_streaming());
+    r.line.silent = false;
+    let poses = r.poses.clone();
+    let n = poses.borrow().len();
+    assert!(r
+        .line
+        .run_until(Duration::from_secs(10), |_| poses.borrow().len() > n));
+    // The reset that began when the watchdog fired was still probing (for up to 5 s) when
+    // the line came back, and went on from the first answer.
+    assert_eq!(r.texts_with("the master bird does not answer"), 0);
+    assert_eq!(r.line.opens, 2);
+    r.forget_seen();
+    r.line.run_for(Duration::from_millis(500));
+    r.assert_all_arrived();
+}
