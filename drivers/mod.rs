@@ -5,3 +5,4 @@
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
 
 pub mod fastrak;
+pub mod flock;

@@ -1,5 +1,6 @@
 //! A virtual serial line for tests: a [`SerialDriver`] on one end, a [`DeviceModel`] (a device
-//! simulator) on the other, both on a virtual clock, with faults on demand.
+//! simulator) on the other, both on a virtual clock, with faults on demand. [`VirtualLines`]
+//! runs several such lines on one clock, for devices whose ports cooperate.
 //!
 //! Nothing here sleeps or reads a clock, so a test runs a device through its whole reset
 //! sequence, a watchdog time-out and a reopen in microseconds of real time, and the same seed
@@ -236,9 +237,9 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
         .min()
     }
 
-    /// Runs everything due at the current time, then moves the clock to the next event (but
-    /// not past `limit`). Returns false when nothing is scheduled before `limit`.
-    pub fn step(&mut self, limit: Instant) -> bool {
+    /// Runs everything due at the current time: a pending reopen, the device's output, the
+    /// reads that arrived, the driver's deadline.
+    fn run_due(&mut self) {
         if self.reopen_at.is_some_and(|t| t <= self.now.mono) {
             self.reopen_at = None;
             self.open_port();
@@ -253,6 +254,19 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
             self.driver.poll(self.now, &mut self.ops);
             self.carry_out();
         }
+    }
+
+    /// Moves the virtual clock to `t` (not earlier than now).
+    fn advance_to(&mut self, t: Instant) {
+        if t > self.now.mono {
+            self.now = self.now.plus(t - self.now.mono);
+        }
+    }
+
+    /// Runs everything due at the current time, then moves the clock to the next event (but
+    /// not past `limit`). Returns false when nothing is scheduled before `limit`.
+    pub fn step(&mut self, limit: Instant) -> bool {
+        self.run_due();
         match self.next_event() {
             Some(t) if t <= limit => {
                 // Always make progress, even when an event is already due.
@@ -289,6 +303,111 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
                     return done(self);
                 }
                 self.now = self.now.plus(limit - self.now.mono);
+            }
+        }
+    }
+}
+
+/// Several virtual lines on one virtual clock, for devices that need cooperating ports (a
+/// master line and one line per receiver, say).
+///
+/// Each line keeps its own faults ([`VirtualLine::split_reads`], [`VirtualLine::silent`],
+/// [`VirtualLine::inject`], [`VirtualLine::close`], …); time moves for all of them together,
+/// so drivers (and device models) that share state see one consistent clock. At each moment
+/// every line runs what is due, in index order, and again while one line's work made another
+/// due at the same moment. Move time only through these methods (not a line's own
+/// [`VirtualLine::run_for`]), or the lines' clocks part.
+pub struct VirtualLines<D: SerialDriver, M: DeviceModel> {
+    /// The lines, in the order given to [`new`](Self::new).
+    pub lines: Vec<VirtualLine<D, M>>,
+    now: Now,
+}
+
+impl<D: SerialDriver, M: DeviceModel> VirtualLines<D, M> {
+    /// Joins each driver to its device model and opens the ports at `start`, in order (line
+    /// `i` draws its random faults from `seed + i`).
+    pub fn new(pairs: impl IntoIterator<Item = (D, M)>, start: Now, seed: u64) -> Self {
+        let lines = pairs
+            .into_iter()
+            .enumerate()
+            .map(|(i, (driver, device))| {
+                VirtualLine::new(driver, device, start, seed.wrapping_add(i as u64))
+            })
+            .collect();
+        VirtualLines { lines, now: start }
+    }
+
+    /// The virtual time.
+    pub fn now(&self) -> Now {
+        self.now
+    }
+
+    /// Line `i`.
+    pub fn line(&mut self, i: usize) -> &mut VirtualLine<D, M> {
+        &mut self.lines[i]
+    }
+
+    fn earliest_event(&self) -> Option<Instant> {
+        self.lines.iter().filter_map(VirtualLine::next_event).min()
+    }
+
+    /// Runs everything due now on every line, then moves the clock to the next event on any
+    /// line (but not past `limit`). Returns false when nothing is scheduled before `limit`.
+    pub fn step(&mut self, limit: Instant) -> bool {
+        // A driver's work may make another line due at this same moment (shared state); a
+        // few passes settle that without moving the clock.
+        for _ in 0..4 {
+            for line in &mut self.lines {
+                line.run_due();
+            }
+            if !self.earliest_event().is_some_and(|t| t <= self.now.mono) {
+                break;
+            }
+        }
+        match self.earliest_event() {
+            Some(t) if t <= limit => {
+                let t = t.max(self.now.mono + Duration::from_micros(1));
+                if t > limit {
+                    return false;
+                }
+                self.advance_to(t);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    fn advance_to(&mut self, t: Instant) {
+        if t > self.now.mono {
+            self.now = self.now.plus(t - self.now.mono);
+        }
+        for line in &mut self.lines {
+            line.advance_to(t);
+        }
+    }
+
+    /// Runs all lines for `d` of virtual time.
+    pub fn run_for(&mut self, d: Duration) {
+        let limit = self.now.mono + d;
+        while self.step(limit) {}
+        if self.now.mono < limit {
+            self.advance_to(limit);
+            self.step(limit);
+        }
+    }
+
+    /// Runs until `done` holds or `max` of virtual time passes; returns whether `done` held.
+    pub fn run_until(&mut self, max: Duration, mut done: impl FnMut(&mut Self) -> bool) -> bool {
+        let limit = self.now.mono + max;
+        loop {
+            if done(self) {
+                return true;
+            }
+            if !self.step(limit) {
+                if self.now.mono >= limit {
+                    return done(self);
+                }
+                self.advance_to(limit);
             }
         }
     }
@@ -389,6 +508,53 @@ mod tests {
         l.run_for(Duration::from_millis(600));
         assert_eq!(l.opens, 2);
         assert_eq!(l.written.len(), 2);
+    }
+
+    #[test]
+    fn lines_share_one_clock_and_keep_their_own_faults() {
+        let start = Now {
+            mono: Instant::now(),
+            wall: TimeVal::new(1_000_000, 0),
+        };
+        let pair = || {
+            (
+                Recorder {
+                    got: Vec::new(),
+                    closed: 0,
+                },
+                Streamer {
+                    next: None,
+                    reply: false,
+                },
+            )
+        };
+        let mut lines = VirtualLines::new([pair(), pair(), pair()], start, 5);
+        lines.line(1).silent = true;
+        lines.run_for(Duration::from_millis(15));
+        lines.line(2).close();
+        lines.run_for(Duration::from_millis(20));
+        let t = lines.now().mono;
+        assert_eq!(t - start.mono, Duration::from_millis(35));
+        for l in &lines.lines {
+            assert_eq!(l.now(), lines.now());
+        }
+        let text = |l: &VirtualLine<Recorder, Streamer>| -> Vec<u8> {
+            l.driver.got.iter().map(|g| g.0).collect()
+        };
+        assert_eq!(text(&lines.lines[0]), b"okabcabcabc");
+        assert_eq!(text(&lines.lines[1]), b"");
+        // Closed at 15 ms, after one record; still closed.
+        assert_eq!(text(&lines.lines[2]), b"okabc");
+        assert_eq!(lines.lines[2].driver.closed, 1);
+        // Both running lines saw the same byte at the same moment.
+        assert_eq!(
+            lines.lines[0].driver.got[2].1,
+            start.mono + Duration::from_millis(10) + lines.lines[0].latency
+        );
+        assert!(lines.run_until(Duration::from_secs(1), |ls| ls.lines[2].opens == 2));
+        // Reopened 500 ms after the close (the check runs after the step that reopened).
+        let reopened = lines.now().mono - start.mono;
+        assert!(reopened >= Duration::from_millis(515) && reopened < Duration::from_millis(516));
     }
 
     #[test]
