@@ -8,7 +8,12 @@
 //! set, a reopen. The serial layer carries those out on a real port registered in the server's
 //! poll; the test line carries them out on a device model.
 
+pub mod device;
 pub mod driver;
+pub mod port;
+pub mod pty;
 pub mod testing;
 
+pub use device::SerialDevice;
 pub use driver::{Parity, PortKind, PortOp, PortOps, PortSettings, SerialDriver};
+pub use port::Port;

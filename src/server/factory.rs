@@ -8,7 +8,10 @@ use crate::devices::dial::DialExample;
 use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
+use crate::drivers::fastrak::FastrakDriver;
+use crate::drivers::flock::{FlockDriver, FlockParallelPort};
 use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
+use crate::serial::SerialDevice;
 
 /// What [`build_devices`] has to say about an entry, for the program to print.
 #[derive(Debug)]
@@ -45,12 +48,14 @@ pub fn build_devices(
     let mut devices: Vec<Box<dyn ServerDevice>> = Vec::new();
     for entry in entries {
         match build_one(entry, conn) {
-            Ok(dev) => {
-                note(BuildNote::Opened {
-                    entry,
-                    name: dev.name(),
-                });
-                devices.push(dev);
+            Ok(built) => {
+                if let Some(first) = built.first() {
+                    note(BuildNote::Opened {
+                        entry,
+                        name: first.name(),
+                    });
+                }
+                devices.extend(built);
             }
             Err(error) if warn_only => note(BuildNote::Skipped { entry, error }),
             Err(e) => return Err(e),
@@ -59,9 +64,40 @@ pub fn build_devices(
     Ok(devices)
 }
 
-fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Box<dyn ServerDevice>, String> {
+/// The devices of one entry: usually one; a device on several serial lines (Flock_Parallel)
+/// runs one per line.
+fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Vec<Box<dyn ServerDevice>>, String> {
     let at = |e: crate::Error| format!("{}: {}: {e}", entry.location, entry.keyword);
     match &entry.config {
+        DeviceConfig::Fastrak(c) => {
+            let driver = FastrakDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::Flock(c) => {
+            let driver = FlockDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::FlockParallel(c) => {
+            let ports = FlockParallelPort::new_group(c, conn).map_err(at)?;
+            Ok(ports
+                .into_iter()
+                .map(|d| {
+                    let path = d.port().to_string();
+                    Box::new(SerialDevice::new(&path, d, conn)) as Box<dyn ServerDevice>
+                })
+                .collect())
+        }
+        other => build_simple(entry, other, conn).map(|d| vec![d]),
+    }
+}
+
+fn build_simple(
+    entry: &DeviceEntry,
+    config: &DeviceConfig,
+    conn: &Connection,
+) -> Result<Box<dyn ServerDevice>, String> {
+    let at = |e: crate::Error| format!("{}: {}: {e}", entry.location, entry.keyword);
+    match config {
         DeviceConfig::TrackerNull(c) => Ok(Box::new(
             TrackerNull::new(&c.name, conn, c.sensors as usize, c.rate as f64).map_err(at)?,
         )),
@@ -101,6 +137,13 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Box<dyn ServerDev
             .unknown_error()
             .map(|e| e.to_string())
             .unwrap_or_else(|| format!("{}: unknown device", entry.location))),
+        DeviceConfig::InterSense(_) => Err(format!(
+            "{}: vrpn_Tracker_InterSense needs InterSense's own library, which this server \
+             does not use; an IS-600 or IS-900 in Fastrak mode is served by a \
+             vrpn_Tracker_Fastrak line (with IS900time for its clock, Wand and Stylus lines \
+             for its buttons and analogs)",
+            entry.location
+        )),
         other => Err(format!(
             "{}: {} is recognised but this vrpn_server cannot serve it yet",
             entry.location,

@@ -1,0 +1,311 @@
+//! A driver on a real port, as a device the server loop runs: the port waits in the server's
+//! poll, bytes are handed to the driver with the time the poll woke for them, the driver's
+//! requests are carried out, and a port that fails or vanishes is reported and reopened —
+//! for every driver alike.
+
+use std::io;
+use std::time::{Duration, Instant};
+
+use super::driver::{PortOp, PortOps, SerialDriver};
+use super::port::Port;
+use crate::connection::Connection;
+use crate::devices::text::TextSeverity;
+use crate::devices::ServerDevice;
+use crate::dispatch::SenderId;
+use crate::net::Reactor;
+use crate::time::Now;
+
+/// How often a port that cannot be opened is tried again.
+pub const REOPEN_INTERVAL: Duration = Duration::from_secs(1);
+/// Bytes read per read call.
+const READ_CHUNK: usize = 512;
+/// Output the port did not take at once, kept for the next pass (commands are small; a driver
+/// that writes more than this to a line that does not drain loses the excess).
+const MAX_PENDING_WRITE: usize = 16 * 1024;
+
+/// A driver and the port it reads. See the module documentation.
+pub struct SerialDevice<D: SerialDriver> {
+    driver: D,
+    path: String,
+    name: String,
+    conn: Connection,
+    sender: Option<SenderId>,
+    reactor: Option<Reactor>,
+    port: Option<Port>,
+    token: Option<mio::Token>,
+    ops: PortOps,
+    pending: Vec<u8>,
+    buf: Box<[u8; READ_CHUNK]>,
+    reopen_at: Option<Instant>,
+    /// The last open failure reported (not repeated while it stays the same).
+    reported: Option<String>,
+    /// Times the port was opened.
+    opens: u64,
+    /// The time of the last pass (to retry output the port did not take).
+    last_pass: Option<Instant>,
+}
+
+impl<D: SerialDriver> SerialDevice<D> {
+    /// Runs `driver` on the port at `path`, reporting problems as texts from the driver's
+    /// device on `conn`, and waiting in `conn`'s reactor (a connection without one — loopback —
+    /// makes the device read its port on every pass instead). The port opens at the first
+    /// pass.
+    pub fn new(path: &str, driver: D, conn: &Connection) -> SerialDevice<D> {
+        let name = driver.name().to_string();
+        SerialDevice {
+            sender: conn.register_sender(&name).ok(),
+            driver,
+            path: path.to_string(),
+            name,
+            conn: conn.clone(),
+            reactor: conn.reactor(),
+            port: None,
+            token: None,
+            ops: PortOps::new(),
+            pending: Vec::with_capacity(256),
+            buf: Box::new([0; READ_CHUNK]),
+            reopen_at: None,
+            reported: None,
+            opens: 0,
+            last_pass: None,
+        }
+    }
+
+    /// The driver.
+    pub fn driver(&self) -> &D {
+        &self.driver
+    }
+
+    /// The driver, to change it.
+    pub fn driver_mut(&mut self) -> &mut D {
+        &mut self.driver
+    }
+
+    /// The port's path.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// True while the port is open.
+    pub fn is_open(&self) -> bool {
+        self.port.is_some()
+    }
+
+    /// Times the port was opened (first open included).
+    pub fn opens(&self) -> u64 {
+        self.opens
+    }
+
+    fn text(&self, severity: TextSeverity, text: &str) {
+        if let Some(sender) = self.sender {
+            let _ = self.conn.send_text(sender, severity, 0, text);
+        }
+    }
+
+    fn open(&mut self, now: Now) {
+        match Port::open(&self.path, self.driver.port_kind()) {
+            Ok(port) => {
+                if let Some(r) = &self.reactor {
+                    match r.register_fd(port.fd(), mio::Interest::READABLE) {
+                        Ok(t) => self.token = Some(t),
+                        Err(e) => {
+                            self.failed_to_open(now, e);
+                            return;
+                        }
+                    }
+                }
+                if self.reported.take().is_some() || self.opens > 0 {
+                    let text = format!("serial port {} is open again", self.path);
+                    self.text(TextSeverity::Normal, &text);
+                }
+                self.port = Some(port);
+                self.opens += 1;
+                self.reopen_at = None;
+                self.pending.clear();
+                self.driver.opened(now, &mut self.ops);
+                self.carry_out(now);
+            }
+            Err(e) => self.failed_to_open(now, e),
+        }
+    }
+
+    fn failed_to_open(&mut self, now: Now, e: io::Error) {
+        self.reopen_at = Some(now.mono + REOPEN_INTERVAL);
+        let what = e.to_string();
+        if self.reported.as_deref() != Some(what.as_str()) {
+            let text = format!(
+                "cannot open serial port {} for {}: {what}; trying again every {:?}",
+                self.path, self.name, REOPEN_INTERVAL
+            );
+            self.text(TextSeverity::Error, &text);
+            self.reported = Some(what);
+        }
+    }
+
+    fn close(&mut self) {
+        if let Some(port) = self.port.take() {
+            if let (Some(r), Some(t)) = (&self.reactor, self.token.take()) {
+                r.deregister_fd(port.fd(), t);
+            }
+        }
+        self.pending.clear();
+    }
+
+    /// The port failed or vanished: say so, tell the driver, and reopen on schedule.
+    fn fail(&mut self, now: Now, why: &str) {
+        self.close();
+        self.driver.closed(now);
+        let text = format!(
+            "serial port {} of {} failed ({why}); reopening it when it comes back",
+            self.path, self.name
+        );
+        self.text(TextSeverity::Error, &text);
+        self.reported = Some(why.to_string());
+        self.reopen_at = Some(now.mono + REOPEN_INTERVAL);
+    }
+
+    /// Carries out the driver's requests, in order.
+    fn carry_out(&mut self, now: Now) {
+        let mut reopen = false;
+        let mut failure = None;
+        if let Some(port) = self.port.as_mut() {
+            for op in self.ops.ops().iter().copied() {
+                match op {
+                    PortOp::Write { start, len } => {
+                        let bytes = self.ops.write_bytes(start, len);
+                        let mut done = 0;
+                        if self.pending.is_empty() {
+                            match port.write(bytes) {
+                                Ok(n) => done = n,
+                                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+                                Err(e) => {
+                                    failure = Some(e.to_string());
+                                    break;
+                                }
+                            }
+                        }
+                        let rest = &bytes[done..];
+                        let room = MAX_PENDING_WRITE.saturating_sub(self.pending.len());
+                        self.pending
+                            .extend_from_slice(&rest[..rest.len().min(room)]);
+                    }
+                    PortOp::FlushInput => {
+                        let _ = port.flush_input();
+                    }
+                    PortOp::FlushOutput => {
+                        self.pending.clear();
+                        let _ = port.flush_output();
+                    }
+                    PortOp::SetRts(on) => port.set_rts(on),
+                    PortOp::SetDtr(on) => port.set_dtr(on),
+                    PortOp::Reopen => reopen = true,
+                }
+            }
+        }
+        self.ops.clear();
+        if let Some(why) = failure {
+            self.fail(now, &why);
+        } else if reopen {
+            self.close();
+            self.open(now);
+        }
+    }
+
+    /// Writes output the port did not take before.
+    fn write_pending(&mut self, now: Now) {
+        let Some(port) = self.port.as_ref() else {
+            return;
+        };
+        if self.pending.is_empty() {
+            return;
+        }
+        match port.write(&self.pending) {
+            Ok(n) => {
+                self.pending.drain(..n);
+            }
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+            Err(e) => self.fail(now, &e.to_string()),
+        }
+    }
+
+    /// Reads everything waiting, handing it to the driver with the time the poll woke for it.
+    fn read_all(&mut self, now: Now) {
+        let arrived = match (&self.reactor, self.token) {
+            (Some(r), Some(t)) => {
+                let ready = r.take(t);
+                if !ready.readable {
+                    return;
+                }
+                ready.woke.unwrap_or(now)
+            }
+            // No poll (a loopback connection): read every pass, stamped with the pass time.
+            _ => now,
+        };
+        loop {
+            let Some(port) = self.port.as_ref() else {
+                return;
+            };
+            match port.read(&mut self.buf[..]) {
+                Ok(0) => {
+                    self.fail(now, "end of file");
+                    return;
+                }
+                Ok(n) => {
+                    self.driver.received(&self.buf[..n], arrived, &mut self.ops);
+                    self.carry_out(now);
+                }
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => {
+                    // A pseudo-terminal whose master closed reads EIO; an unplugged USB
+                    // adapter, ENODEV or EIO.
+                    self.fail(now, &e.to_string());
+                    return;
+                }
+            }
+        }
+    }
+}
+
+impl<D: SerialDriver> ServerDevice for SerialDevice<D> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn mainloop(&mut self, now: Now) {
+        self.last_pass = Some(now.mono);
+        if self.port.is_none() && self.reopen_at.map_or(true, |t| now.mono >= t) {
+            self.open(now);
+        }
+        if self.port.is_some() {
+            self.read_all(now);
+        }
+        if self.port.is_some() && self.driver.next_deadline().is_some_and(|d| now.mono >= d) {
+            self.driver.poll(now, &mut self.ops);
+            self.carry_out(now);
+        }
+        self.write_pending(now);
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        let retry_write = (!self.pending.is_empty())
+            .then(|| self.last_pass.map(|t| t + Duration::from_millis(1)))
+            .flatten();
+        [
+            if self.port.is_some() {
+                self.driver.next_deadline()
+            } else {
+                None
+            },
+            if self.port.is_none() {
+                self.reopen_at
+            } else {
+                None
+            },
+            retry_write,
+        ]
+        .into_iter()
+        .flatten()
+        .min()
+    }
+}
