@@ -47,6 +47,19 @@ impl<M: DeviceModel + Send + 'static> Simulated<M> {
     }
 }
 
+impl<M: DeviceModel + Send + 'static> Simulated<M> {
+    /// Unplugs the simulated device (the server's port fails) or plugs it back.
+    #[allow(dead_code)]
+    fn set_plugged(&self, plugged: bool) {
+        let mut d = self.device.lock().unwrap();
+        if plugged {
+            d.plug().unwrap();
+        } else {
+            d.unplug();
+        }
+    }
+}
+
 impl<M: DeviceModel + Send + 'static> Drop for Simulated<M> {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
