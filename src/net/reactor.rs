@@ -43,6 +43,10 @@ struct Slot {
     used: bool,
     /// The owner wants the wake time of readable events (serial ports: first-byte time).
     timed: bool,
+    /// Readiness here is not "activity" (listeners: new connections and connection requests
+    /// do not need the busy-poll latency that data does, and a flood of them must not keep a
+    /// server spinning).
+    quiet: bool,
     ready: Ready,
 }
 
@@ -84,6 +88,7 @@ impl Reactor {
         slots.push(Slot {
             used: true,
             timed: false,
+            quiet: true,
             ready: Ready::default(),
         });
         Ok(Reactor {
@@ -116,6 +121,7 @@ impl Reactor {
         inner.slots[i] = Slot {
             used: true,
             timed: false,
+            quiet: false,
             ready: Ready::default(),
         };
         Token(i)
@@ -130,6 +136,18 @@ impl Reactor {
             inner.free.push(token.0);
             return Err(e);
         }
+        Ok(token)
+    }
+
+    /// Registers a listening socket: its readiness does not count as activity (see
+    /// [`take_activity`](Self::take_activity)).
+    pub fn register_quiet(
+        &self,
+        source: &mut impl Source,
+        interest: Interest,
+    ) -> io::Result<Token> {
+        let token = self.register(source, interest)?;
+        self.inner.borrow_mut().slots[token.0].quiet = true;
         Ok(token)
     }
 
@@ -228,11 +246,12 @@ impl Reactor {
                 }
                 continue;
             }
-            // Only incoming data counts as activity: write-space events follow every send.
-            any |= ev.is_readable();
             let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
                 continue;
             };
+            // Only incoming data counts as activity: write-space events follow every send,
+            // and listeners are quiet.
+            any |= ev.is_readable() && !slot.quiet;
             let timed = slot.timed;
             let r = &mut slot.ready;
             if ev.is_readable() || ev.is_read_closed() || ev.is_error() {

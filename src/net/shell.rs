@@ -38,8 +38,26 @@ struct Sock<S> {
 }
 
 impl<S: mio::event::Source> Sock<S> {
-    fn register(reactor: &Reactor, mut sock: S, interest: Interest) -> io::Result<Sock<S>> {
-        let token = reactor.register(&mut sock, interest)?;
+    fn register(reactor: &Reactor, sock: S, interest: Interest) -> io::Result<Sock<S>> {
+        Self::register_as(reactor, sock, interest, false)
+    }
+
+    /// A listener: its readiness is not activity (see [`Reactor::register_quiet`]).
+    fn register_listener(reactor: &Reactor, sock: S) -> io::Result<Sock<S>> {
+        Self::register_as(reactor, sock, Interest::READABLE, true)
+    }
+
+    fn register_as(
+        reactor: &Reactor,
+        mut sock: S,
+        interest: Interest,
+        quiet: bool,
+    ) -> io::Result<Sock<S>> {
+        let token = if quiet {
+            reactor.register_quiet(&mut sock, interest)?
+        } else {
+            reactor.register(&mut sock, interest)?
+        };
         Ok(Sock {
             sock,
             token,
@@ -179,9 +197,9 @@ impl Shell {
             .port();
         let udp = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(ip, port)))
             .map_err(|e| Error::io(format!("listening on UDP {ip}:{port}"), e))?;
-        let tcp = Sock::register(reactor, tcp, Interest::READABLE)
+        let tcp = Sock::register_listener(reactor, tcp)
             .map_err(|e| Error::io("registering listeners", e))?;
-        let udp = Sock::register(reactor, udp, Interest::READABLE)
+        let udp = Sock::register_listener(reactor, udp)
             .map_err(|e| Error::io("registering listeners", e))?;
         Ok(Shell {
             reactor: Some(reactor.clone()),
@@ -221,7 +239,7 @@ impl Shell {
             };
             announced = Some(SocketAddrV4::new(shown, port));
             listener = Some(
-                Sock::register(reactor, l, Interest::READABLE)
+                Sock::register_listener(reactor, l)
                     .map_err(|e| Error::io("registering the call-back listener", e))?,
             );
         }

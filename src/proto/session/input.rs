@@ -24,7 +24,7 @@ impl Session {
         from: SocketAddrV4,
         local: SocketAddrV4,
     ) -> Option<PeerId> {
-        if self.live_peers() >= self.limits.max_connections {
+        if self.live_peers() >= self.limits.max_connections && !self.evict_greeting_peer(now) {
             let text = format!(
                 "refused TCP client {from}: {} clients already connected (limit)",
                 self.limits.max_connections
@@ -63,6 +63,10 @@ impl Session {
                 && p.addr == target
                 && matches!(p.phase, Phase::Connecting | Phase::AwaitingCookie)
         });
+        if !busy && self.live_peers() >= limits.max_connections {
+            // Full: the peer greeting longest gives way, as for a TCP connection.
+            self.evict_greeting_peer(now);
+        }
         let (pending, live) = (self.pending_callbacks(), self.live_peers());
         let Kind::Server(policy) = &mut self.kind else {
             return;
@@ -79,6 +83,28 @@ impl Session {
             Decision::Ignore(_) => {}
         }
         self.request_summary(now.mono);
+    }
+
+    /// Makes room for a new connection when every slot is taken: the peer that has been
+    /// greeting longest without sending a cookie is dropped (a crowd of silent connections
+    /// cannot keep a real client out). Returns false when every peer is connected.
+    fn evict_greeting_peer(&mut self, now: Now) -> bool {
+        let oldest = self
+            .peers
+            .iter()
+            .flatten()
+            .filter(|p| p.phase == Phase::AwaitingCookie)
+            .min_by_key(|p| p.deadline)
+            .map(|p| (p.id, p.label.clone()));
+        let Some((id, who)) = oldest else {
+            return false;
+        };
+        let text = format!(
+            "dropped {who}, which had not greeted yet, to make room for a new client \
+             (Limits::max_connections)"
+        );
+        self.drop_peer(now, id, text, None);
+        true
     }
 
     pub(super) fn request_summary(&mut self, now: Instant) {
