@@ -157,7 +157,7 @@ fn udp_ports_of(pid: u32) -> Vec<u16> {
         .collect()
 }
 
-/// 1. One peer describing ~2000 names cannot lock anyone out: a new client that describes a
+/// Hole 1: One peer describing ~2000 names cannot lock anyone out: a new client that describes a
 /// type the server never heard of is served, and the flooder's names are freed when it goes.
 #[test]
 fn a_name_flood_locks_nobody_out() {
@@ -203,7 +203,7 @@ fn a_name_flood_locks_nobody_out() {
     assert!(a.run_for(Duration::from_millis(300)) > 20);
 }
 
-/// 1b. A description with an id no peer may use is refused before its name enters the table.
+/// Hole 1b: A description with an id no peer may use is refused before its name enters the table.
 #[test]
 fn a_bad_id_leaves_no_name_behind() {
     let server = common::start_server(CFG, 0);
@@ -227,7 +227,7 @@ fn a_bad_id_leaves_no_name_behind() {
     assert!(!conn.peer_senders().iter().any(|s| s.contains("smuggled")));
 }
 
-/// 2. Silent connections cannot hold every slot: a real client gets in at once (the one
+/// Hole 2: Silent connections cannot hold every slot: a real client gets in at once (the one
 /// greeting longest gives way), and the silent ones are dropped at the greeting deadline.
 #[test]
 fn silent_connections_cannot_hold_every_slot() {
@@ -261,7 +261,7 @@ fn silent_connections_cannot_hold_every_slot() {
     );
 }
 
-/// 2b. Connection requests that make the server call back silent listeners, from 260
+/// Hole 2b: Connection requests that make the server call back silent listeners, from 260
 /// addresses: the call-backs are rate-limited and give way when the server is full, so a real
 /// client on the UDP path still gets in.
 #[test]
@@ -306,7 +306,7 @@ fn call_backs_to_silent_listeners_cannot_fill_the_slots() {
     );
 }
 
-/// 3. A flood of connection requests: call-backs are rate-limited, notices too, memory stays,
+/// Hole 3: A flood of connection requests: call-backs are rate-limited, notices too, memory stays,
 /// and a connected client on the UDP path keeps its poses.
 #[test]
 fn a_request_flood_is_rate_limited() {
@@ -362,7 +362,7 @@ fn a_request_flood_is_rate_limited() {
     );
 }
 
-/// 4a. A connection request is called back at its source address, never at the address it
+/// Hole 4a: A connection request is called back at its source address, never at the address it
 /// names (no reflection at a third host).
 #[test]
 fn call_backs_go_to_the_source_address() {
@@ -395,7 +395,7 @@ fn call_backs_go_to_the_source_address() {
     assert!(to_attacker, "the call-back went to the request's source");
 }
 
-/// 4b. Datagrams from a stranger to the server's UDP sockets change nothing: a UDP description
+/// Hole 4b: Datagrams from a stranger to the server's UDP sockets change nothing: a UDP description
 /// sent that way does not move a client's stream.
 #[test]
 fn udp_descriptions_from_strangers_move_nothing() {
@@ -423,7 +423,7 @@ fn udp_descriptions_from_strangers_move_nothing() {
     assert_eq!(stolen, 0, "the attacker received {stolen} bytes");
 }
 
-/// 4c. Messages injected into a client's UDP socket from another address are not delivered.
+/// Hole 4c: Messages injected into a client's UDP socket from another address are not delivered.
 #[test]
 fn injected_datagrams_reach_no_callback() {
     let server = common::start_server(CFG, 0);
@@ -448,7 +448,7 @@ fn injected_datagrams_reach_no_callback() {
     assert!(a.poses.get() > 0);
 }
 
-/// 5. A name that is not UTF-8, described by one peer and echoed by the server to everyone,
+/// Hole 5: A name that is not UTF-8, described by one peer and echoed by the server to everyone,
 /// cuts nobody off.
 #[test]
 fn a_name_that_is_not_utf8_cuts_nobody_off() {
@@ -467,7 +467,7 @@ fn a_name_that_is_not_utf8_cuts_nobody_off() {
     assert!(names.iter().any(|n| n.contains('\u{fffd}')), "{names:?}");
 }
 
-/// 6. Connection churn leaves memory and descriptors where they were.
+/// Hole 6: Connection churn leaves memory and descriptors where they were.
 #[test]
 fn churn_leaves_memory_flat() {
     let server = common::start_server(CFG, 0);
@@ -495,7 +495,7 @@ fn churn_leaves_memory_flat() {
     assert!(a.wait_for_poses(Duration::from_secs(5)));
 }
 
-/// 7. Host names in connection requests and UDP descriptions are never looked up in the
+/// Hole 7: Host names in connection requests and UDP descriptions are never looked up in the
 /// loop: the server answers others at once while they pour in.
 #[test]
 fn host_names_are_not_resolved_in_the_loop() {
