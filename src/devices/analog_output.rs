@@ -111,6 +111,11 @@ impl AnalogOutputRemote {
         self.reports.add(f)
     }
 
+    /// Removes a callback [`on_num_channels`](Self::on_num_channels) returned.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        self.reports.remove(id)
+    }
+
     /// Asks the server to set one channel (RELIABLE).
     pub fn request_change_channel_value(&self, channel: i32, value: f64) -> Result<(), Error> {
         let mut buf = [0u8; codec::ChangeRequest::LEN];
@@ -244,6 +249,11 @@ impl AnalogOutputServer {
     /// Calls `f` after every request (valid or not) with all current values.
     pub fn on_request(&self, f: impl FnMut(&AnalogOutputValues) + 'static) -> HandlerId {
         self.shared.callbacks.add(f)
+    }
+
+    /// Removes a callback [`on_request`](Self::on_request) returned.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        self.shared.callbacks.remove(id)
     }
 
     /// The current output values.

@@ -380,6 +380,12 @@ impl ForceDeviceRemote {
         self.shared.error.add(f)
     }
 
+    /// Removes a callback an `on_*` method of this remote returned.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        let s = &self.shared;
+        s.force.remove(id) || s.scp.remove(id) || s.error.remove(id)
+    }
+
     /// Sends a plane RELIABLE (C++ `startSurface`).
     pub fn start_surface(&self, plane: &Plane) -> Result<(), Error> {
         let mut buf = [0u8; Plane::LEN];
@@ -635,6 +641,12 @@ impl ForceDeviceServer {
     /// Calls `f` for every trimesh, scene or constraint request a client sends.
     pub fn on_request(&self, f: impl FnMut(&ForceRequestMsg) + 'static) -> HandlerId {
         self.shared.request.add(f)
+    }
+
+    /// Removes a callback `on_plane`, `on_plane2`, `on_force_field` or `on_request` returned.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        let s = &self.shared;
+        s.plane.remove(id) || s.plane2.remove(id) || s.field.remove(id) || s.request.remove(id)
     }
 
     /// Calls `f` for every custom effect a client sends (including stops).

@@ -302,6 +302,11 @@ impl PoserServer {
         self.shared.relative.add(f)
     }
 
+    /// Removes a callback `on_pose` or `on_relative_pose` returned.
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        self.shared.pose.remove(id) || self.shared.relative.remove(id)
+    }
+
     /// The server's current state.
     pub fn state(&self) -> PoserState {
         *self.shared.state.borrow()

@@ -390,6 +390,18 @@ impl TrackerRemote {
         self.shared.workspace.add(f)
     }
 
+    /// Removes a callback any `on_*` method of this remote returned; false when it is not
+    /// one of them (ids are unique in the process, so another list's id never matches).
+    pub fn remove_callback(&self, id: HandlerId) -> bool {
+        let s = &self.shared;
+        s.pose.remove(id)
+            || s.velocity.remove(id)
+            || s.acceleration.remove(id)
+            || s.to_room.remove(id)
+            || s.unit_to_sensor.remove(id)
+            || s.workspace.remove(id)
+    }
+
     /// The latest pose of `sensor`, if one arrived.
     pub fn pose(&self, sensor: usize) -> Option<TrackerPose> {
         self.shared
