@@ -24,13 +24,25 @@
 //!
 //! # Layers
 //!
-//! Bytes flow one way through the crate, each layer a module:
+//! Each layer is a module and uses only those below it:
 //!
-//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads).
-//! - [`connection`]: names, handlers, class of service, the public [`Connection`].
-//! - `net`: the mio shell that moves bytes between sockets and endpoints.
-//! - [`devices`]: tracker (and more), each a server half and a remote half.
-//! - [`server`]: the `vrpn_server` loop.
+//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads);
+//!   [`log`] the same for `.vrpn` log files; [`time`] the timestamps and [`Now`].
+//! - [`proto`]: the protocol without sockets or clock — a [`proto::Session`] is fed bytes and
+//!   the time and hands back bytes, I/O requests, deliveries and its next deadline.
+//! - [`net`]: the shell — a [`Reactor`] (one poll shared by every connection and serial port
+//!   of a loop) and the sockets; the only place that reads the clock.
+//! - [`connection`]: the public [`Connection`]: names, handlers, `mainloop()`.
+//! - [`devices`], [`layered`], [`serial`], [`drivers`]: tracker and the other device types,
+//!   the layered trackers, the serial layer and the hardware drivers.
+//! - [`server`]: `vrpn.cfg` and the `vrpn_server` loop.
+//!
+//! # Printing
+//!
+//! The library prints nothing an application did not ask for: a connection's notices go to
+//! [`Connection::on_notice`] callbacks and device text messages to their handlers; only when
+//! nothing is registered does the default printer write them, to stderr, one line each
+//! ([`connection::set_text_printer`] chooses C++'s stdout format, or nothing).
 
 #![warn(missing_docs)]
 

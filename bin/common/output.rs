@@ -2,7 +2,7 @@
 //!
 //! Rust ignores SIGPIPE, so writing to a closed pipe is an error rather than the signal that
 //! silently ends a C program; `println!` turns that error into a panic. The programs write
-//! through [`line`] instead: once the reader has gone, [`closed`] turns true, further output is
+//! through [`line()`] instead: once the reader has gone, [`closed`] turns true, further output is
 //! dropped, and the program's loop ends as if interrupted, with its usual exit status. Other
 //! write failures (a full disk) also stop the output and are kept for [`failure`].
 
@@ -56,7 +56,7 @@ pub fn failure() -> Option<io::Error> {
     FAILURE.lock().ok().and_then(|mut f| f.take())
 }
 
-/// `println!` that never panics: see [`line`].
+/// `println!` that never panics: see [`line()`].
 macro_rules! outln {
     ($($arg:tt)*) => {
         $crate::output::line(format_args!($($arg)*))

@@ -7,7 +7,7 @@
 //! packed message to local handlers directly, which is how an in-process remote hears an
 //! in-process server.
 //!
-//! Under the handle sit the three layers: a [`Session`](crate::proto::Session) (the protocol,
+//! Under the handle sit the three layers: a [`Session`] (the protocol,
 //! no sockets, no clock), the shell (the sockets, in a [`Reactor`]) and the handler tables.
 //! One [`mainloop`](Connection::mainloop) pass reads the clock once and hands that time down.
 //!

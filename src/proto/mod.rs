@@ -1,6 +1,6 @@
 //! The VRPN protocol without sockets and without a clock.
 //!
-//! A [`Session`](session::Session) is everything one connection decides: the cookie exchange
+//! A [`Session`] is everything one connection decides: the cookie exchange
 //! and version check, descriptions and id translation, the UDP channel negotiation, the
 //! sending policy (channel choice, shedding, backlog limits), fairness between peers, drops,
 //! the client's connect-and-retry schedule, the server's connection-request policy, log hooks

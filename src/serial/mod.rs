@@ -4,7 +4,7 @@
 //!
 //! A driver never touches a file descriptor or a clock. It is handed the bytes the port read
 //! (with the time the poll woke for the first of them), the current time on each deadline, and
-//! it answers with [`PortOps`](driver::PortOps): bytes to write, input to flush, modem lines to
+//! it answers with [`PortOps`]: bytes to write, input to flush, modem lines to
 //! set, a reopen. The serial layer carries those out on a real port registered in the server's
 //! poll; the test line carries them out on a device model.
 
