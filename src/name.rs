@@ -1,6 +1,6 @@
 //! Device names: `Tracker0@host`, `Tracker0@host:3884`, `Tracker0@tcp://host:3884`,
 //! `Tracker0@x-vrpn://host`, `Tracker0@loopback:`, `Tracker0@file:///abs/log.vrpn` …
-//! parsed with the rules of C++ `vrpn_get_connection_by_name` (WIRE.md §2.1).
+//! parsed with the rules of C++ `vrpn_get_connection_by_name`.
 
 use crate::wire::DEFAULT_PORT;
 

@@ -1,7 +1,7 @@
 //! Message timestamps as VRPN carries them: a `struct timeval` of seconds and microseconds
 //! since the Unix epoch.
 //!
-//! On the wire the seconds are the low 32 bits of `time_t` (WIRE.md §12). We keep them in an
+//! On the wire the seconds are the low 32 bits of `time_t`. We keep them in an
 //! `i64` so arithmetic never overflows; header seconds are decoded as unsigned 32-bit (what a
 //! 64-bit C++ peer does) and payload timevals as signed.
 

@@ -96,7 +96,7 @@ fn every_request_round_trips() {
         ForceRequest::ConstraintPlaneNormal(ConstraintVec3 { v: [0.0, 1.0, 0.0] }),
         ForceRequest::ConstraintKSpring(ConstraintKSpring { k: 150.0 }),
     ];
-    // 27 request types: DEVICES.md §8.1 rows 5..24 (minus getNewObjectID) and 27..34.
+    // 27 request types: the trimesh, scene and constraint messages clients send.
     assert_eq!(sent.len(), 27);
     let mut names: Vec<_> = sent.iter().map(|r| r.type_name()).collect();
     names.sort_unstable();

@@ -1,4 +1,4 @@
-//! Layered trackers (LAYERED.md §2, §3): scripted analog and button input through sources on
+//! Layered trackers (AnalogFly and ButtonFly): scripted analog and button input through sources on
 //! the same connection, with a pinned clock, against poses worked out by hand; several flyers
 //! over one joystick; and `vrpn.cfg` entries built by `build_devices`, including a source on
 //! another server.

@@ -1,4 +1,4 @@
-//! Analog (DEVICES.md §4): a vector of up to 128 channel values, always sent whole.
+//! Analog: a vector of up to 128 channel values, always sent whole.
 //! [`AnalogRemote`] is the client half, [`AnalogServer`] the server half,
 //! [`AnalogExample`] our example server (sine waves).
 

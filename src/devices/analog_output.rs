@@ -1,4 +1,4 @@
-//! Analog output (DEVICES.md §5): clients ask the server to set output channels; the server
+//! Analog output: clients ask the server to set output channels; the server
 //! announces its channel count on every new connection. [`AnalogOutputRemote`] is the client
 //! half, [`AnalogOutputServer`] the server half (with the callbacks of C++
 //! `vrpn_Analog_Output_Callback_Server`).

@@ -1,4 +1,4 @@
-//! Button (DEVICES.md §3): edges (`Change`), the full state vector (`States`), mode requests
+//! Button: edges (`Change`), the full state vector (`States`), mode requests
 //! (`Admin`) and toggle alerts. [`ButtonRemote`] is the client half, [`ButtonServer`] the
 //! server half (C++ `vrpn_Button_Filter` semantics), [`ButtonExample`] the example server.
 

@@ -1,4 +1,4 @@
-//! Dial (DEVICES.md §6): incremental rotation of each dial, in revolutions.
+//! Dial: incremental rotation of each dial, in revolutions.
 //! [`DialRemote`] is the client half, [`DialServer`] the server half, [`DialExample`] the
 //! C++ `vrpn_Dial_Example_Server`.
 

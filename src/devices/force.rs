@@ -1,4 +1,4 @@
-//! ForceDevice (DEVICES.md §8): the server sends Force, SCP and Force_Error; clients send
+//! ForceDevice: the server sends Force, SCP and Force_Error; clients send
 //! planes, force fields, trimesh / scene requests, constraints and custom effects, which the
 //! server hands to callbacks ([`ForceDeviceServer::on_plane`], [`ForceDeviceServer::on_request`],
 //! [`ForceDeviceServer::on_custom_effect`]).
@@ -27,7 +27,7 @@ pub use codec::{
     CONSTRAINT_MODE_POINT, STOP_EFFECT_ID, TRIMESH_GHOST, TRIMESH_HCOLLIDE,
 };
 
-/// Ids of all 35 ForceDevice types, in C++ registration order (index = row − 1 of §8.1).
+/// Ids of all 35 ForceDevice types, in C++ registration order.
 #[derive(Clone, Copy, Debug)]
 pub struct ForceIds(pub [TypeId; 35]);
 
@@ -69,7 +69,7 @@ const REQUEST_MAX: usize = TransformTrimesh::LEN;
 macro_rules! force_requests {
     ($($(#[$doc:meta])* $v:ident($t:ty) = $idx:expr,)*) => {
         /// A client-to-server ForceDevice request other than Plane, Plane2, Force_Field and
-        /// Custom Effect: trimesh, scene and constraint messages (DEVICES.md §8.3).
+        /// Custom Effect: trimesh, scene and constraint messages.
         #[derive(Clone, Copy, Debug, PartialEq)]
         pub enum ForceRequest {
             $($(#[$doc])* $v($t),)*
@@ -79,7 +79,7 @@ macro_rules! force_requests {
             /// Indices into [`ForceIds`] of every request type.
             const INDICES: &'static [usize] = &[$($idx),*];
 
-            /// Index of this request's type in [`ForceIds`] (table row − 1 of DEVICES.md §8.1).
+            /// Index of this request's type in [`ForceIds`] (the order in which the C++ device registers them).
             pub fn type_index(&self) -> usize {
                 match self {
                     $(ForceRequest::$v(_) => $idx,)*
@@ -229,7 +229,7 @@ fn unit(v: [f32; 3]) -> [f64; 3] {
 }
 
 impl Constraint {
-    /// The force field that realises this constraint (DEVICES.md §8.3), starting from `prev`
+    /// The force field that realises this constraint, starting from `prev`
     /// (kept unchanged in mode NONE).
     pub fn field(&self, prev: &ForceField) -> ForceField {
         let k = self.kspring as f64;

@@ -1,4 +1,4 @@
-//! Poser (DEVICES.md §9): the client requests poses and velocities; the server clamps, stores
+//! Poser: the client requests poses and velocities; the server clamps, stores
 //! and calls back. Quirks of the C++ remote and server are kept for wire compatibility.
 
 use std::cell::RefCell;

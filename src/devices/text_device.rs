@@ -1,4 +1,4 @@
-//! Text devices (DEVICES.md §7): [`TextSender`] and [`TextReceiver`] over the base
+//! Text devices: [`TextSender`] and [`TextReceiver`] over the base
 //! `vrpn_Base text_message` type, and [`TextExample`] (our extension for `vrpn_server`).
 
 use std::cell::Cell;

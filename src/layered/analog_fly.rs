@@ -1,4 +1,4 @@
-//! `vrpn_Tracker_AnalogFly` (LAYERED.md §2): up to six analog axes become a tracker pose,
+//! `vrpn_Tracker_AnalogFly`: up to six analog axes become a tracker pose,
 //! either directly (absolute) or by integrating rates (differential), with optional reset and
 //! clutch buttons.
 
@@ -51,7 +51,9 @@ impl State {
         self.quat = [0.0, 0.0, 0.0, 1.0];
     }
 
-    /// LAYERED.md §2.6.
+    /// One update step: the axis values (scaled by `dt` unless absolute) become a
+    /// translation and Euler rotation that is applied to the current pose (or replaces it when
+    /// absolute), with the clutch taken into account, in C++'s order of operations.
     fn update(&mut self, dt: f64) {
         let dt = if self.absolute { 1.0 } else { dt };
         let v = self.value;
@@ -268,7 +270,7 @@ impl TrackerAnalogFly {
             )
     }
 
-    /// One mainloop pass at the device's clock (LAYERED.md §2.5).
+    /// One mainloop pass at the device's clock.
     pub fn poll(&mut self) {
         for a in &self.axes {
             a.poll();

@@ -1,4 +1,4 @@
-//! `vrpn_Tracker_ButtonFly` (LAYERED.md §3): buttons jump to fixed poses (absolute axes) or fly
+//! `vrpn_Tracker_ButtonFly`: buttons jump to fixed poses (absolute axes) or fly
 //! at a constant velocity while held (differential axes), optionally scaled by analogs.
 
 use std::cell::RefCell;
@@ -55,7 +55,8 @@ impl State {
         self.quat = quat_from_row_matrix(&self.current);
     }
 
-    /// LAYERED.md §3.5.
+    /// One update step: each active axis moves (velocity) or turns (rotation) by its vector
+    /// times the scale factors and `dt`, in C++'s order of operations.
     fn update(&mut self, dt: f64) {
         let (mut tx, mut ty, mut tz) = (0.0, 0.0, 0.0);
         let (mut rx, mut ry, mut rz) = (0.0, 0.0, 0.0);
@@ -253,7 +254,7 @@ impl TrackerButtonFly {
             )
     }
 
-    /// One mainloop pass at the device's clock (LAYERED.md §3.4).
+    /// One mainloop pass at the device's clock.
     pub fn poll(&mut self) {
         for b in &self.buttons {
             b.poll();

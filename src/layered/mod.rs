@@ -1,4 +1,4 @@
-//! Layered devices (LAYERED.md): server objects that are themselves clients of other devices.
+//! Layered devices: server objects that are themselves clients of other devices.
 //!
 //! [`analog_fly::TrackerAnalogFly`] turns analog axes (a joystick, a space mouse) into a tracker
 //! pose; [`button_fly::TrackerButtonFly`] does the same from buttons. Each listens to its
@@ -7,7 +7,7 @@
 //! the source's report), a `NAME@host` source a remote on a client connection to that server,
 //! serviced from the layered device's mainloop.
 //!
-//! The pose arithmetic reproduces the quatlib routines of LAYERED.md §4 operation for operation
+//! The pose arithmetic reproduces C++ VRPN's quaternion library (quatlib) operation for operation
 //! so that reported poses agree with C++ bit for bit.
 
 use crate::connection::Connection;
@@ -38,7 +38,7 @@ pub const IDENTITY: Mat4 = [
     [0.0, 0.0, 0.0, 1.0],
 ];
 
-/// quatlib `q_euler_to_col_matrix` (LAYERED.md §4.1): rotation block only, row/column 3 of the
+/// quatlib `q_euler_to_col_matrix`: rotation block only, row/column 3 of the
 /// identity.
 pub fn euler_col_matrix(yaw: f64, pitch: f64, roll: f64) -> Mat4 {
     let (sy, cy) = (yaw.sin(), yaw.cos());
@@ -52,7 +52,7 @@ pub fn euler_col_matrix(yaw: f64, pitch: f64, roll: f64) -> Mat4 {
     ]
 }
 
-/// quatlib `q_matrix_mult` (LAYERED.md §4.2): `a × b`, sums accumulated from 0 left to right.
+/// quatlib `q_matrix_mult`: `a × b`, sums accumulated from 0 left to right.
 pub fn mat_mult(a: &Mat4, b: &Mat4) -> Mat4 {
     let mut c = [[0.0; 4]; 4];
     for (r, row) in c.iter_mut().enumerate() {
@@ -67,7 +67,7 @@ pub fn mat_mult(a: &Mat4, b: &Mat4) -> Mat4 {
     c
 }
 
-/// quatlib `q_from_row_matrix` (LAYERED.md §4.3), returning (x, y, z, w).
+/// quatlib `q_from_row_matrix`, returning (x, y, z, w).
 pub fn quat_from_row_matrix(m: &Mat4) -> [f64; 4] {
     let tr = m[0][0] + m[1][1] + m[2][2];
     let mut q = [0.0; 4];
@@ -98,7 +98,7 @@ pub fn quat_from_row_matrix(m: &Mat4) -> [f64; 4] {
     q
 }
 
-/// quatlib `q_from_euler` (LAYERED.md §4.4), returning (x, y, z, w).
+/// quatlib `q_from_euler`, returning (x, y, z, w).
 pub fn quat_from_euler(yaw: f64, pitch: f64, roll: f64) -> [f64; 4] {
     let (cy, sy) = ((yaw / 2.0).cos(), (yaw / 2.0).sin());
     let (cp, sp) = ((pitch / 2.0).cos(), (pitch / 2.0).sin());
@@ -129,7 +129,7 @@ fn quat_mult(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
     ]
 }
 
-/// quatlib `q_xyz_quat_invert` (LAYERED.md §4.5): the inverse of the transform (t, q).
+/// quatlib `q_xyz_quat_invert`: the inverse of the transform (t, q).
 pub fn xyz_quat_invert(t: [f64; 3], q: [f64; 4]) -> ([f64; 3], [f64; 4]) {
     let qi = quat_invert(&q);
     let v = [-t[0], -t[1], -t[2], 0.0];
@@ -138,7 +138,7 @@ pub fn xyz_quat_invert(t: [f64; 3], q: [f64; 4]) -> ([f64; 3], [f64; 4]) {
     ([r[0], r[1], r[2]], qi)
 }
 
-/// quatlib `q_to_col_matrix` (LAYERED.md §4.6).
+/// quatlib `q_to_col_matrix`.
 pub fn col_matrix_from_quat(q: [f64; 4]) -> Mat4 {
     let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
     let s = 2.0 / (x * x + y * y + z * z + w * w);

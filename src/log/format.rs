@@ -1,4 +1,4 @@
-//! The log entry codec (LOGFILE.md §1.2): a 24-byte header of six big-endian words, then the
+//! The log entry codec: a 24-byte header of six big-endian words, then the
 //! payload, unpadded.
 //!
 //! ```text
@@ -31,7 +31,7 @@ pub const fn entry_len(payload_len: usize) -> usize {
 /// The six header words of one log entry, as stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct EntryHeader {
-    /// Message type id; negative for system messages (WIRE.md §7).
+    /// Message type id; negative for system messages.
     pub type_id: i32,
     /// Sender id, or for system messages their parameter (described id, UDP port, log mode, 0).
     pub sender: i32,
@@ -166,7 +166,7 @@ impl<'a> LogEntry<'a> {
     }
 }
 
-/// A decoded system entry (WIRE.md §7, LOGFILE.md §6.1).
+/// A decoded system entry.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SystemEntry<'a> {
     /// Type −1: the log's sender `id` is called `name`.
@@ -422,7 +422,7 @@ mod tests {
 
     #[test]
     fn encodes_the_manual_example() {
-        // LOGFILE.md §8, entry 1.
+        // The first entry of a C++ server log: a sender description of "Tracker0".
         let mut out = [0xAAu8; 64];
         let payload = b"\0\0\0\x09Tracker0\0";
         let n = encode_entry(

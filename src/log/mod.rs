@@ -1,4 +1,4 @@
-//! VRPN log files (`.vrpn` stream files, LOGFILE.md): the entry codec, a reader, a buffered
+//! VRPN log files (`.vrpn` stream files): the entry codec, a reader, a buffered
 //! writer, and the name tables a reader rebuilds from the descriptions in a log.
 //!
 //! A file is the 24-byte cookie followed by entries, each a 24-byte header of six big-endian

@@ -1,5 +1,5 @@
 //! The `log id → name` tables a reader rebuilds from the description entries of a log
-//! (LOGFILE.md §1.3, §6.1).
+//!.
 
 use super::format::{LogEntry, SystemEntry};
 use crate::wire::{WireError, MAX_IDS};

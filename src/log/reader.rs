@@ -1,4 +1,4 @@
-//! Reading a log file (LOGFILE.md §4): cookie check, then entries one by one as borrowed
+//! Reading a log file: cookie check, then entries one by one as borrowed
 //! views, stopping cleanly at the first damaged byte.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! The clock and position of a log replay (LOGFILE.md §6), free of I/O and of dispatch.
+//! The clock and position of a log replay, free of I/O and of dispatch.
 //!
 //! A [`Replay`] holds a preloaded log and decides which entry plays next; the connection core
 //! feeds each played entry through the same id-translation path as a live peer's message.

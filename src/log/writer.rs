@@ -1,4 +1,4 @@
-//! Writing a log file (LOGFILE.md §1, §3.1): the cookie, then entries, through a preallocated
+//! Writing a log file: the cookie, then entries, through a preallocated
 //! in-memory buffer that a poll loop drains a bounded amount at a time.
 
 use std::fs::{File, OpenOptions};
@@ -18,7 +18,7 @@ pub const DEFAULT_BUFFER_LEN: usize = 256 * 1024;
 pub const MIN_BUFFER_LEN: usize = COOKIE_LEN + entry_len(MAX_ENTRY_PAYLOAD);
 
 /// The cookie an incoming log stores for a peer: the peer's cookie bytes up to its first NUL,
-/// the rest zero (LOGFILE.md §1.1). At most 24 bytes of `peer` are used.
+/// the rest zero. At most 24 bytes of `peer` are used.
 pub fn log_cookie_from_peer(peer: &[u8]) -> [u8; COOKIE_LEN] {
     let mut out = [0u8; COOKIE_LEN];
     for (o, &b) in out.iter_mut().zip(peer.iter().take_while(|&&b| b != 0)) {

@@ -1,5 +1,5 @@
 //! The 24-byte cookie both sides send first on every TCP connection, and that opens every log
-//! file (WIRE.md §4.4, LOGFILE.md §1.1).
+//! file.
 
 use super::{need, Result};
 

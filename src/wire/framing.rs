@@ -1,4 +1,4 @@
-//! Splitting byte streams and datagrams into messages (WIRE.md §5.2, §5.3).
+//! Splitting byte streams and datagrams into messages.
 //!
 //! [`StreamDecoder`] reassembles a TCP stream in a fixed buffer sized once: reads land in
 //! [`StreamDecoder::spare`], whole messages come out of [`StreamDecoder::next_message`] as

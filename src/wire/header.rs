@@ -1,4 +1,4 @@
-//! The 24-byte message header (WIRE.md §5.1).
+//! The 24-byte message header.
 //!
 //! ```text
 //! length | tv_sec | tv_usec | sender | type | seqno | payload | pad to 8

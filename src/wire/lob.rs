@@ -1,5 +1,5 @@
 //! The UDP connection request ("lob" packet) a client sends to a server's UDP port: the text
-//! `IP PORT` and a NUL, naming where the server should connect back (WIRE.md §4.2).
+//! `IP PORT` and a NUL, naming where the server should connect back.
 
 use super::{Result, WireError};
 

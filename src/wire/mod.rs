@@ -1,8 +1,10 @@
 //! The pure VRPN 07.x codec: byte slices in, typed values out, and back. No I/O, no allocation.
 //!
-//! Layout facts come from `protocol/WIRE.md` (message framing, cookie, system messages) and
-//! `protocol/DEVICES.md` (device payloads, in [`payload`]). Every decoder checks lengths before
-//! reading, so no decoder panics on any input; the fuzz targets hold it to that.
+//! Message framing, the cookie and the system messages are here; device payloads are in
+//! [`payload`]. Every decoder checks lengths before reading, so no decoder panics on any input;
+//! the fuzz targets hold it to that. All multi-byte fields are big-endian, and every message is
+//! a 24-byte header (length, seconds, microseconds, sender, type, sequence) followed by its
+//! payload padded to a multiple of 8 bytes.
 
 pub mod cookie;
 pub mod framing;

@@ -1,4 +1,4 @@
-//! System messages: negative type ids (WIRE.md §7).
+//! System messages: negative type ids.
 
 use byteorder::{BigEndian, ByteOrder};
 
@@ -69,7 +69,7 @@ pub fn decode_udp_description(payload: &[u8]) -> Result<&str> {
     std::str::from_utf8(host).map_err(|_| WireError::BadValue("UDP description host"))
 }
 
-/// A decoded log description (WIRE.md §7.4).
+/// A decoded log description.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LogDescription<'a> {
     /// File name for the incoming log, empty for none.

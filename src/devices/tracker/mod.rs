@@ -1,5 +1,5 @@
 //! Tracker: poses (position + unit quaternion), velocities and accelerations per sensor
-//! (DEVICES.md §2). [`TrackerRemote`] is the client half; [`TrackerServer`] the server half any
+//!. [`TrackerRemote`] is the client half; [`TrackerServer`] the server half any
 //! driver reports through; [`TrackerNull`] the `vrpn_Tracker_NULL` test device.
 
 use std::cell::{Cell, RefCell};

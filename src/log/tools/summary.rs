@@ -79,7 +79,7 @@ impl SystemCounts {
     }
 }
 
-/// What a whole log holds (LOGFILE.md §6.3 time bases).
+/// What a whole log holds, with the time bases a replay uses (first and last user message).
 #[derive(Debug)]
 pub struct Summary {
     /// The file.

@@ -1,4 +1,4 @@
-//! Analog messages (DEVICES.md §4): the full channel vector.
+//! Analog messages: the full channel vector.
 //!
 //! Wire layout of `vrpn_Analog Channel`: the channel count n **as an f64**, then n × f64.
 
@@ -23,7 +23,7 @@ pub const fn channels_len(n: usize) -> usize {
 }
 
 /// Reads the count of a Channel payload the way the C++ remote does (`(long)` of the double),
-/// clamped to [`CHANNEL_MAX`] as DEVICES.md §4.3 advises; NaN and negative counts are errors.
+/// clamped to [`CHANNEL_MAX`] (a larger count would overrun the C++ arrays); NaN and negative counts are errors.
 fn read_count(buf: &[u8]) -> Result<usize> {
     need(buf, 8)?;
     let n = BigEndian::read_f64(&buf[0..8]);

@@ -1,4 +1,4 @@
-//! Analog output messages (DEVICES.md §5): clients ask a server to set output channels; the
+//! Analog output messages: clients ask a server to set output channels; the
 //! server announces how many channels it has. C++ checks none of these lengths.
 
 use byteorder::{BigEndian, ByteOrder};

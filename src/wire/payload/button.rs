@@ -1,4 +1,4 @@
-//! Button messages (DEVICES.md §3): edges, the full state vector, mode requests and alerts.
+//! Button messages: edges, the full state vector, mode requests and alerts.
 
 use byteorder::{BigEndian, ByteOrder};
 

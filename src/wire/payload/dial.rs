@@ -1,4 +1,4 @@
-//! Dial messages (DEVICES.md §6): incremental rotation of one dial, in revolutions.
+//! Dial messages: incremental rotation of one dial, in revolutions.
 
 /// One dial's rotation since its last report, server->client, 12 bytes ([`Update`]).
 pub const UPDATE: &str = "vrpn_Dial update";

@@ -1,4 +1,4 @@
-//! ForceDevice messages (DEVICES.md §8): forces and contact points from the server; surfaces,
+//! ForceDevice messages: forces and contact points from the server; surfaces,
 //! force fields, constraints, effects and trimesh scene edits from the client.
 //!
 //! Every C++ decode helper checks its length exactly, so every fixed layout here decodes with

@@ -1,4 +1,4 @@
-//! Device payload layouts (DEVICES.md): one module per device type, each with plain structs
+//! Device payload layouts: one module per device type, each with plain structs
 //! that `decode` from and `encode` into byte slices.
 //!
 //! Every module also names the message types exactly as C++ registers them (`pub const`

@@ -1,4 +1,4 @@
-//! Poser messages (DEVICES.md §9): a client asks a server to move to a pose or velocity.
+//! Poser messages: a client asks a server to move to a pose or velocity.
 //!
 //! All four types are client->server. The C++ server checks the lengths exactly (56 for poses,
 //! 64 for velocities) and fails the handler otherwise, so decoding is exact-length. The

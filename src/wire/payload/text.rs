@@ -1,4 +1,4 @@
-//! Base-class messages every device registers (DEVICES.md §1): the text message, ping and pong.
+//! Base-class messages every device registers: the text message, ping and pong.
 //!
 //! The text payload is always 1032 bytes: u32 severity, u32 level, then a 1024-byte buffer
 //! holding a NUL-terminated string. C++ leaves the bytes after the NUL uninitialised; we zero

@@ -1,4 +1,4 @@
-//! Tracker messages (DEVICES.md §2): poses, velocities and accelerations per sensor, the
+//! Tracker messages: poses, velocities and accelerations per sensor, the
 //! tracker-to-room and unit-to-sensor transforms, the workspace, and the client requests.
 //!
 //! Quaternions are `[x, y, z, w]`. The C++ remote checks every server->client length exactly
