@@ -34,6 +34,7 @@
 
 #![warn(missing_docs)]
 
+pub mod clock_sync;
 pub mod connection;
 pub mod devices;
 pub mod dispatch;
