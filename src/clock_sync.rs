@@ -222,7 +222,8 @@ pub enum ReplyOutcome {
 pub struct ClockSyncStats {
     /// Queries returned by [`ClockSync::poll_query`].
     pub queries_sent: u64,
-    /// Queries forgotten without a reply (lost, too slow, or dropped on disconnection).
+    /// Queries forgotten without a reply: none within `max_round_trip`, pushed out of a full
+    /// table, or outstanding at a disconnection.
     pub queries_lost: u64,
     /// Replies that gave a valid sample ([`ReplyOutcome::Used`], `Held` or `ClockStepped`).
     pub replies_valid: u64,

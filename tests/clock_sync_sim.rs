@@ -218,6 +218,9 @@ struct Sim {
     /// Checkpoints (true times) where the truth was outside the bound, while not strict.
     violations: u64,
     last_violation: u64,
+    /// Id of the last reply delivered, and how many replies arrived after a later one.
+    last_reply_id: Option<u32>,
+    reordered: u64,
 }
 
 fn outcome_index(o: ReplyOutcome) -> usize {
@@ -254,6 +257,8 @@ impl Sim {
             strict: true,
             violations: 0,
             last_violation: 0,
+            last_reply_id: None,
+            reordered: 0,
         }
     }
 
@@ -308,6 +313,12 @@ impl Sim {
                 let mut buf = [0u8; Reply::LEN];
                 r.encode(&mut buf);
                 let r = Reply::decode(&buf).unwrap();
+                if let Some(last) = self.last_reply_id {
+                    if (r.id.wrapping_sub(last) as i32) < 0 {
+                        self.reordered += 1;
+                    }
+                }
+                self.last_reply_id = Some(r.id);
                 let outcome = self.client.handle_reply(&r, self.now());
                 self.outcomes[outcome_index(outcome)] += 1;
             }
@@ -578,9 +589,15 @@ fn duplicated_and_reordered_replies_are_ignored() {
         jitter_ns: 30_000_000, // 30 ms jitter at 20 ms spacing: quick-round replies reorder
         ..Link::asymmetric()
     };
-    let mut sim = Sim::new(Clocks::skewed(), link, ClockSyncConfig::default(), 9);
+    let config = ClockSyncConfig {
+        resync_queries: 3,
+        ..ClockSyncConfig::default()
+    };
+    let mut sim = Sim::new(Clocks::skewed(), link, config, 9);
     sim.run(30 * MINUTE, 100_000_000);
     print_report("duplicates and reordering", &sim);
+    eprintln!("{} replies arrived after a later one", sim.reordered);
+    assert!(sim.reordered > 100, "{}", sim.reordered);
     let unmatched = sim.outcomes[outcome_index(ReplyOutcome::Unmatched)];
     let stats = sim.client.stats();
     assert!(unmatched > 50, "{unmatched}");
@@ -736,10 +753,18 @@ fn steady_state_exchanges_do_not_allocate() {
 #[test]
 #[ignore]
 fn cost_per_exchange() {
+    for window in [32, 64] {
+        exchange_cost(window);
+    }
+}
+
+fn exchange_cost(window: usize) {
     let clocks = Clocks::skewed();
     let base = Instant::now();
     let config = ClockSyncConfig {
+        quick_queries: 1,
         resync_interval: Duration::from_millis(1),
+        window,
         ..ClockSyncConfig::default()
     };
     let mut client = ClockSync::new(
@@ -777,7 +802,19 @@ fn cost_per_exchange() {
     }
     let per = start.elapsed().as_secs_f64() / n as f64;
     eprintln!(
-        "{:.2} µs per exchange (window 32, checksum {sum:.0})",
+        "{:.2} µs per exchange (window {window}, checksum {sum:.0})",
         per * 1e6
     );
+    // Translating one incoming timestamp, what a receive path would do per message.
+    let now = Now {
+        mono: base + Duration::from_nanos(t + 2_000_000),
+        wall: clocks.local_wall(t + 2_000_000),
+    };
+    let mut stamp = clocks.remote_wall(t);
+    let start = Instant::now();
+    for _ in 0..n {
+        stamp = client.remote_to_local(stamp, now).plus_secs(11_820.5);
+    }
+    let per = start.elapsed().as_secs_f64() / n as f64;
+    eprintln!("{:.1} ns per remote_to_local ({stamp})", per * 1e9);
 }
