@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use crate::log::names::NameTable;
 use crate::log::reader::LogReader;
 use crate::wire::payload::{
-    analog, analog_output, button, dial, force, poser, text as text_payload, tracker,
+    analog, analog_output, button, clock, dial, force, poser, text as text_payload, tracker,
 };
 use crate::wire::{self, lob, system, Cookie, DatagramMessages, StreamDecoder, COOKIE_LEN};
 use crate::{Connection, Limits};
@@ -63,6 +63,8 @@ pub fn all_payload_decoders(p: &[u8]) {
         force::ConstraintKSpring,
         poser::PoseRequest,
         poser::VelocityRequest,
+        clock::Query,
+        clock::Reply,
     );
     if let Ok(c) = analog::Channels::decode(p) {
         let _ = c.as_slice().len();

@@ -5,6 +5,9 @@
 //! strings) and, where a device registers several, lists them in C++ registration order in
 //! `TYPE_NAMES`.
 //!
+//! [`clock`] is the exception: this crate's own clock-synchronisation messages, which C++ 07.x
+//! peers ignore.
+//!
 //! Conventions shared by every struct here:
 //!
 //! * `decode(&[u8]) -> wire::Result<Self>` never panics. Where the C++ remote handler checks the
@@ -154,6 +157,7 @@ macro_rules! fixed_payload {
 pub mod analog;
 pub mod analog_output;
 pub mod button;
+pub mod clock;
 pub mod dial;
 pub mod force;
 pub mod poser;

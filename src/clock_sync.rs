@@ -1,0 +1,1098 @@
+//! Clock synchronisation between two peers: a pure, allocation-free state machine per peer that
+//! decides when to send a [`Query`], turns each [`Reply`] into an offset sample, and estimates
+//! the offset between the peer's clock and ours with a bound that holds.
+//!
+//! Nothing here reads a clock or touches a socket: the caller passes a [`Now`] into every call,
+//! sends the queries [`ClockSync::poll_query`] returns, wakes up at
+//! [`ClockSync::next_deadline`], and hands every decoded reply to [`ClockSync::handle_reply`].
+//! The responder's side is [`Reply::answer`].
+//!
+//! # Offset and bound
+//!
+//! The *offset* is `peer clock − local clock` (both wall clocks, read at the same instant), so
+//! `local = remote − offset`; [`ClockSync::remote_to_local`] applies it.
+//!
+//! One exchange gives, from NTP's four timestamps (`t1` query sent and `t4` reply received on
+//! the local clock; `t2` query received and `t3` reply sent on the peer's):
+//!
+//! ```text
+//! offset     = ((t2 − t1) + (t3 − t4)) / 2
+//! round trip =  (t4 − t1) − (t3 − t2)
+//! ```
+//!
+//! If the query takes `a ≥ 0` to travel and the reply `b ≥ 0`, the measured offset is the true
+//! one plus `(a − b) / 2` and the round trip is `a + b`, so the true offset is within half the
+//! round trip of the measurement — whatever the asymmetry. Each sample's *radius* adds what the
+//! arithmetic cannot see: the microsecond rounding of the four timestamps (2 µs in all) and the
+//! two clocks drifting apart during the exchange (at most `max_skew_ppm` × `t4 − t1`).
+//! `t4 − t1` is measured on the monotonic clock, so a local wall-clock step during an exchange
+//! does not corrupt the sample.
+//!
+//! Over a long session the offset moves: the clocks run at slightly different rates (the
+//! *drift*, tens of ppm for ordinary crystals). The estimator keeps the best exchange of each of
+//! the last `window` rounds. Assuming the drift is constant over that window, every pair of kept
+//! samples bounds it: `(θk ± rk) − (θj ± rj)` over `tk − tj`. Intersecting all pairs with
+//! `±max_skew_ppm` gives an interval that must contain the true drift; the estimate uses its
+//! middle, and its half-width (plus `wander_ppm` for rates that change) is the *drift error*.
+//! Then, for any kept sample `s`,
+//!
+//! ```text
+//! offset(t)      = θs + drift × (t − ts)
+//! uncertainty(t) = rs + drift error × |t − ts|
+//! ```
+//!
+//! holds, because both `θs ± rs` and the drift interval contain the truth. The estimate rests on
+//! the sample that makes this uncertainty smallest — NTP's clock filter, where the lowest round
+//! trip wins unless it is old enough for the drift error to outweigh it. Since every sample's
+//! uncertainty grows at the same rate, that choice only changes when a sample arrives.
+//!
+//! The bound assumes that `t1`/`t3` are read no later than the bytes are written, `t2`/`t4` no
+//! earlier than they are read, each clock's drift is within `max_skew_ppm` and changes by less
+//! than `wander_ppm` over the window.
+//!
+//! # Rounds
+//!
+//! When a connection comes up, a *quick* round sends `quick_queries` queries `quick_spacing`
+//! apart, and the first reply puts sync in effect. Afterwards a round of `resync_queries`
+//! queries goes out every `resync_interval`. Only the lowest-radius sample of a round is kept.
+//!
+//! # Robustness
+//!
+//! * A reply is used only if its exchange id **and** echoed `t1` match a query still
+//!   outstanding; duplicates, replies to forgotten queries and replies meant for another querier
+//!   are ignored ([`ReplyOutcome::Unmatched`]). A query unanswered after `max_round_trip` is
+//!   forgotten: a lost reply costs nothing but that sample.
+//! * A negative round trip or a peer whose `t3` precedes its `t2` is impossible and discarded
+//!   ([`ReplyOutcome::Absurd`]); a round trip over `max_round_trip` is useless and discarded
+//!   ([`ReplyOutcome::TooSlow`]).
+//! * A sample that contradicts the estimate (the two intervals do not overlap) means a clock was
+//!   stepped, or the drift changed. The first one is held aside ([`ReplyOutcome::Held`]); if
+//!   the next is also contradictory and agrees with the held one, the history restarts from
+//!   those two and a quick round follows ([`ReplyOutcome::ClockStepped`]). A slower change of
+//!   drift makes old pairs disagree; the oldest samples are then dropped until the rest agree.
+//! * A peer that never answers (a C++ 07.x peer ignores these messages) never puts sync in
+//!   effect, and remote timestamps pass through unchanged. While no reply has come on the
+//!   connection the gap between rounds doubles from `resync_interval` up to
+//!   `max_silent_interval`, so such a peer costs one 40-byte message a minute.
+//! * The estimate lapses (sync no longer in effect) when no exchange has succeeded for
+//!   `stale_after`.
+//!
+//! # Reconnection
+//!
+//! A new connection may reach another process, even another host, so [`ClockSync::on_connected`]
+//! keeps nothing about the peer's clock: history, drift and outstanding queries are cleared
+//! (also by [`ClockSync::on_disconnected`]) and a quick round starts. Exchange ids keep counting
+//! and the statistics keep adding up, so a late reply from the old connection can never match a
+//! new query.
+
+use std::time::{Duration, Instant};
+
+use crate::time::{Now, TimeVal};
+pub use crate::wire::payload::clock::{Query, Reply};
+
+/// Most rounds a [`ClockSync`] keeps (the upper limit of [`ClockSyncConfig::window`]).
+pub const MAX_WINDOW: usize = 64;
+
+/// Most queries outstanding at once; when full, the oldest is forgotten (counted as lost).
+pub const MAX_PENDING: usize = 16;
+
+/// Error in seconds that microsecond timestamps add to a sample: each of `t1`, `t2`, `t3` is
+/// truncated by less than 1 µs, which moves the measured offset by less than 1.5 µs.
+const TIMESTAMP_ERROR: f64 = 2e-6;
+
+/// Samples closer in time than this (seconds) bound the drift too loosely to be worth a pair.
+const MIN_PAIR_SPAN: f64 = 1e-3;
+
+/// Tuning of a [`ClockSync`]. [`Default`] gives the values documented on each field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClockSyncConfig {
+    /// Queries in the quick round that starts each connection (default 8; 1..=[`MAX_PENDING`]).
+    pub quick_queries: u32,
+    /// Gap between the queries of one round (default 20 ms).
+    pub quick_spacing: Duration,
+    /// Gap between re-sync rounds once the peer has answered (default 5 s; at least 1 ms).
+    pub resync_interval: Duration,
+    /// Queries in each re-sync round (default 1; 1..=[`MAX_PENDING`]). More queries per round
+    /// find a low-delay exchange more often on a jittery link, at proportional cost.
+    pub resync_queries: u32,
+    /// Rounds whose best sample is kept, for the clock filter and the drift bound (default 32,
+    /// 2..=[`MAX_WINDOW`]): 32 rounds of 5 s measure the drift over 2.6 minutes.
+    pub window: usize,
+    /// Replies slower than this are discarded and unanswered queries forgotten (default 1 s).
+    pub max_round_trip: Duration,
+    /// Sync lapses when no exchange has succeeded for this long (default 30 s).
+    pub stale_after: Duration,
+    /// Longest gap between rounds while the peer has never answered (default 60 s).
+    pub max_silent_interval: Duration,
+    /// Largest rate difference between the two clocks, in ppm (default 500, what NTP
+    /// tolerates). Bounds the drift until samples bound it better.
+    pub max_skew_ppm: f64,
+    /// How much the rate difference may change over the window, in ppm (default 1): added to
+    /// the drift error so temperature and time daemons' slewing stay inside the bound.
+    pub wander_ppm: f64,
+}
+
+impl Default for ClockSyncConfig {
+    fn default() -> ClockSyncConfig {
+        ClockSyncConfig {
+            quick_queries: 8,
+            quick_spacing: Duration::from_millis(20),
+            resync_interval: Duration::from_secs(5),
+            resync_queries: 1,
+            window: 32,
+            max_round_trip: Duration::from_secs(1),
+            stale_after: Duration::from_secs(30),
+            max_silent_interval: Duration::from_secs(60),
+            max_skew_ppm: 500.0,
+            wander_ppm: 1.0,
+        }
+    }
+}
+
+impl ClockSyncConfig {
+    /// The configuration with every field brought into its documented range (a non-finite or
+    /// negative ppm value takes the default).
+    pub fn normalised(self) -> ClockSyncConfig {
+        let d = ClockSyncConfig::default();
+        let ppm = |v: f64, default: f64| {
+            if v.is_finite() && v >= 0.0 {
+                v
+            } else {
+                default
+            }
+        };
+        let resync_interval = self.resync_interval.max(Duration::from_millis(1));
+        ClockSyncConfig {
+            quick_queries: self.quick_queries.clamp(1, MAX_PENDING as u32),
+            quick_spacing: self.quick_spacing,
+            resync_interval,
+            resync_queries: self.resync_queries.clamp(1, MAX_PENDING as u32),
+            window: self.window.clamp(2, MAX_WINDOW),
+            max_round_trip: self.max_round_trip,
+            stale_after: self.stale_after,
+            max_silent_interval: self.max_silent_interval.max(resync_interval),
+            max_skew_ppm: ppm(self.max_skew_ppm, d.max_skew_ppm),
+            wander_ppm: ppm(self.wander_ppm, d.wander_ppm),
+        }
+    }
+}
+
+/// The current estimate of a peer's clock, from [`ClockSync::estimate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Peer clock minus local clock, in seconds.
+    pub offset: f64,
+    /// The true offset is within `offset ± uncertainty` seconds (under the assumptions in the
+    /// module documentation): the radius of the sample the estimate rests on, plus the drift
+    /// error times the time since that sample.
+    pub uncertainty: f64,
+    /// How fast the offset grows, in ppm (the peer's clock rate minus ours).
+    pub drift_ppm: f64,
+    /// Half-width of the interval known to hold the drift, plus the allowed wander, in ppm.
+    pub drift_error_ppm: f64,
+    /// Round trip of the exchange the estimate rests on, in seconds.
+    pub round_trip: f64,
+    /// Seconds since the exchange the estimate rests on.
+    pub age: f64,
+    /// Rounds in the history (at most the configured window).
+    pub samples: usize,
+}
+
+/// What [`ClockSync::handle_reply`] made of a reply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReplyOutcome {
+    /// A valid exchange, taken into the estimate (or beaten by its round's best so far).
+    Used,
+    /// A valid exchange that contradicts the estimate: held aside as a possible clock step.
+    Held,
+    /// A second contradictory exchange agreeing with the held one: a clock was stepped; the
+    /// history restarted from the two and a quick round is due.
+    ClockStepped,
+    /// No outstanding query has this id and `t1`: a duplicate, a reply to a forgotten query
+    /// or to another querier, or any reply while disconnected.
+    Unmatched,
+    /// Impossible timestamps (negative round trip, the peer's `t3` before its `t2`).
+    Absurd,
+    /// Round trip over `max_round_trip`.
+    TooSlow,
+}
+
+/// Counters since the [`ClockSync`] was made (they survive reconnections).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClockSyncStats {
+    /// Queries returned by [`ClockSync::poll_query`].
+    pub queries_sent: u64,
+    /// Queries forgotten without a reply: none within `max_round_trip`, pushed out of a full
+    /// table, or outstanding at a disconnection.
+    pub queries_lost: u64,
+    /// Replies that gave a valid sample ([`ReplyOutcome::Used`], `Held` or `ClockStepped`).
+    pub replies_valid: u64,
+    /// Replies ignored as [`ReplyOutcome::Unmatched`].
+    pub replies_unmatched: u64,
+    /// Replies discarded as [`ReplyOutcome::Absurd`] or [`ReplyOutcome::TooSlow`].
+    pub replies_discarded: u64,
+    /// Clock steps detected ([`ReplyOutcome::ClockStepped`]).
+    pub clock_steps: u64,
+}
+
+/// One exchange, reduced to what the estimator needs. Times are seconds on the local monotonic
+/// clock since [`ClockSync`] was made; offsets are seconds relative to `ClockSync::base_us`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sample {
+    /// Middle of the exchange (`t1` + half the local interval).
+    at: f64,
+    /// Measured offset.
+    offset: f64,
+    /// The true offset at `at` is within `offset ± radius`.
+    radius: f64,
+    /// Round trip.
+    round_trip: f64,
+    /// Round the query belonged to.
+    round: u32,
+}
+
+/// A query sent and not yet answered.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    id: u32,
+    sent: Now,
+    round: u32,
+}
+
+/// Clock synchronisation with one peer: see the module documentation.
+#[derive(Clone, Debug)]
+pub struct ClockSync {
+    config: ClockSyncConfig,
+    /// Origin of the monotonic seconds in [`Sample::at`].
+    epoch: Instant,
+    connected: bool,
+    next_id: u32,
+    round: u32,
+    /// Queries still to send in the current round (0: the next query starts a re-sync round).
+    round_left: u32,
+    next_send: Option<Instant>,
+    /// A reply has been used on this connection.
+    answered: bool,
+    /// Rounds ended without any reply on this connection, for the back-off.
+    silent_rounds: u32,
+    pending: [Option<Pending>; MAX_PENDING],
+    /// Best sample of each kept round, oldest first.
+    history: [Sample; MAX_WINDOW],
+    len: usize,
+    /// Offset in whole microseconds that sample offsets are relative to.
+    base_us: i64,
+    /// Middle of the interval known to hold the drift (seconds per second).
+    drift: f64,
+    /// Half-width of that interval plus the wander allowance.
+    drift_error: f64,
+    /// Index in `history` of the sample the estimate rests on.
+    anchor: usize,
+    /// When the last valid sample was taken into the history.
+    last_used: f64,
+    /// A contradictory sample waiting for confirmation of a clock step.
+    suspect: Option<Sample>,
+    stats: ClockSyncStats,
+}
+
+impl ClockSync {
+    /// A synchroniser for a connection that is up at `now`: the quick round starts at once.
+    pub fn new(config: ClockSyncConfig, now: Now) -> ClockSync {
+        let config = config.normalised();
+        // Ids start somewhere that depends on when we started, so that two queriers behind one
+        // peer (should replies ever reach both) rarely share ids; the echoed t1 settles the rest.
+        let seed = (now.wall.sec as u64)
+            .wrapping_mul(1_000_003)
+            .wrapping_add(now.wall.usec as u64)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let mut sync = ClockSync {
+            config,
+            epoch: now.mono,
+            connected: false,
+            next_id: (seed >> 32) as u32,
+            round: 0,
+            round_left: 0,
+            next_send: None,
+            answered: false,
+            silent_rounds: 0,
+            pending: [None; MAX_PENDING],
+            history: [Sample::default(); MAX_WINDOW],
+            len: 0,
+            base_us: 0,
+            drift: 0.0,
+            drift_error: 0.0,
+            anchor: 0,
+            last_used: 0.0,
+            suspect: None,
+            stats: ClockSyncStats::default(),
+        };
+        sync.on_connected(now);
+        sync
+    }
+
+    /// The configuration in use (normalised).
+    pub fn config(&self) -> &ClockSyncConfig {
+        &self.config
+    }
+
+    /// Counters since creation.
+    pub fn stats(&self) -> ClockSyncStats {
+        self.stats
+    }
+
+    /// The connection (re)opened at `now`: forget the peer's clock and start a quick round.
+    pub fn on_connected(&mut self, now: Now) {
+        self.forget_peer();
+        self.connected = true;
+        self.answered = false;
+        self.silent_rounds = 0;
+        self.start_quick_round(now.mono);
+    }
+
+    /// The connection dropped: forget the peer's clock and send nothing until
+    /// [`on_connected`](Self::on_connected).
+    pub fn on_disconnected(&mut self) {
+        self.forget_peer();
+        self.connected = false;
+        self.round_left = 0;
+        self.next_send = None;
+    }
+
+    /// When [`poll_query`](Self::poll_query) next has a query to send (`None` while
+    /// disconnected).
+    pub fn next_deadline(&self) -> Option<Instant> {
+        if self.connected {
+            self.next_send
+        } else {
+            None
+        }
+    }
+
+    /// The query to send now, if one is due. Its `query_sent` is `now.wall`, so pack it at once
+    /// and stamp the message header with that time. Call again only on a later pass: at most
+    /// one query is due per deadline, and a late caller gets one query, not a burst.
+    pub fn poll_query(&mut self, now: Now) -> Option<Query> {
+        self.expire(now);
+        if !self.connected || now.mono < self.next_send? {
+            return None;
+        }
+        if self.round_left == 0 {
+            self.round = self.round.wrapping_add(1);
+            self.round_left = self.config.resync_queries;
+        }
+        let id = self.next_id;
+        self.next_id = self.next_id.wrapping_add(1);
+        self.remember(Pending {
+            id,
+            sent: now,
+            round: self.round,
+        });
+        self.round_left -= 1;
+        let gap = if self.round_left > 0 {
+            self.config.quick_spacing
+        } else {
+            self.gap_between_rounds()
+        };
+        self.next_send = Some(now.mono + gap);
+        self.stats.queries_sent += 1;
+        Some(Query {
+            id,
+            query_sent: now.wall,
+        })
+    }
+
+    /// Takes a decoded reply received at `t4` (read no earlier than the reply was read from the
+    /// network) and says what became of it. Never fails: whatever the peer sends, the worst is
+    /// a reply ignored.
+    pub fn handle_reply(&mut self, reply: &Reply, t4: Now) -> ReplyOutcome {
+        let slot = self.pending.iter().position(
+            |p| matches!(p, Some(p) if p.id == reply.id && p.sent.wall == reply.query_sent),
+        );
+        let Some(query) = slot.and_then(|i| self.pending[i].take()) else {
+            self.stats.replies_unmatched += 1;
+            return ReplyOutcome::Unmatched;
+        };
+        let sample = match self.measure(&query, reply, t4) {
+            Ok(sample) => sample,
+            Err(outcome) => {
+                self.stats.replies_discarded += 1;
+                return outcome;
+            }
+        };
+        self.stats.replies_valid += 1;
+        self.answered = true;
+        self.add(sample, t4.mono)
+    }
+
+    /// The estimate at `now`, or `None` while sync is not in effect (no valid exchange yet on
+    /// this connection, or none for `stale_after`, or disconnected).
+    pub fn estimate(&self, now: Now) -> Option<Estimate> {
+        let t = self.secs(now.mono);
+        let (offset, uncertainty) = self.predict(t)?;
+        let anchor = &self.history[self.anchor];
+        Some(Estimate {
+            offset: self.base_us as f64 * 1e-6 + offset,
+            uncertainty,
+            drift_ppm: self.drift * 1e6,
+            drift_error_ppm: self.drift_error * 1e6,
+            round_trip: anchor.round_trip,
+            age: t - anchor.at,
+            samples: self.len,
+        })
+    }
+
+    /// Whether sync is in effect at `now`: at least one valid exchange on this connection and
+    /// one within `stale_after`. (It takes `now` because staleness is a matter of time.)
+    pub fn in_effect(&self, now: Now) -> bool {
+        self.predict(self.secs(now.mono)).is_some()
+    }
+
+    /// The local time of a peer timestamp, at `now`: `remote − offset`, with the offset taken at
+    /// the moment the timestamp refers to (drift applied over its age). Returns `remote`
+    /// unchanged while sync is not in effect.
+    pub fn remote_to_local(&self, remote: TimeVal, now: Now) -> TimeVal {
+        let Some(offset_now) = self.offset_micros(now) else {
+            return remote;
+        };
+        let remote_us = micros(remote);
+        let local_guess = remote_us - offset_now as i128;
+        let age = (micros(now.wall) - local_guess) as f64;
+        let offset = offset_now as f64 - self.drift * age;
+        to_timeval(remote_us - offset.round() as i128)
+    }
+
+    /// The peer's time of a local timestamp, at `now`: the inverse of
+    /// [`remote_to_local`](Self::remote_to_local). Returns `local` unchanged while sync is not in
+    /// effect.
+    pub fn local_to_remote(&self, local: TimeVal, now: Now) -> TimeVal {
+        let Some(offset_now) = self.offset_micros(now) else {
+            return local;
+        };
+        let local_us = micros(local);
+        let age = (micros(now.wall) - local_us) as f64;
+        let offset = offset_now as f64 - self.drift * age;
+        to_timeval(local_us + offset.round() as i128)
+    }
+
+    /// The offset at `now` in whole microseconds.
+    fn offset_micros(&self, now: Now) -> Option<i64> {
+        let (offset, _) = self.predict(self.secs(now.mono))?;
+        Some(self.base_us.saturating_add((offset * 1e6).round() as i64))
+    }
+
+    /// Seconds from `epoch` to `t` on the monotonic clock.
+    fn secs(&self, t: Instant) -> f64 {
+        t.saturating_duration_since(self.epoch).as_secs_f64()
+    }
+
+    /// Offset (relative to `base_us`) and uncertainty at monotonic seconds `t`, if in effect.
+    fn predict(&self, t: f64) -> Option<(f64, f64)> {
+        if !self.connected
+            || self.len == 0
+            || t - self.last_used > self.config.stale_after.as_secs_f64()
+        {
+            return None;
+        }
+        let a = &self.history[self.anchor];
+        let dt = t - a.at;
+        Some((
+            a.offset + self.drift * dt,
+            a.radius + self.drift_error * dt.abs(),
+        ))
+    }
+
+    fn forget_peer(&mut self) {
+        for p in self.pending.iter_mut() {
+            if p.take().is_some() {
+                self.stats.queries_lost += 1;
+            }
+        }
+        self.len = 0;
+        self.anchor = 0;
+        self.drift = 0.0;
+        self.drift_error = 0.0;
+        self.suspect = None;
+    }
+
+    fn start_quick_round(&mut self, at: Instant) {
+        self.round = self.round.wrapping_add(1);
+        self.round_left = self.config.quick_queries;
+        self.next_send = Some(at);
+    }
+
+    /// Gap after a round's last query: `resync_interval`, doubled per silent round while the
+    /// peer has never answered on this connection.
+    fn gap_between_rounds(&mut self) -> Duration {
+        if self.answered {
+            return self.config.resync_interval;
+        }
+        let factor = 1u32 << self.silent_rounds.min(20);
+        self.silent_rounds = self.silent_rounds.saturating_add(1);
+        self.config
+            .resync_interval
+            .saturating_mul(factor)
+            .min(self.config.max_silent_interval)
+    }
+
+    /// Stores an outstanding query, forgetting the oldest one if every slot is taken.
+    fn remember(&mut self, query: Pending) {
+        let slot = match self.pending.iter().position(Option::is_none) {
+            Some(free) => free,
+            None => {
+                self.stats.queries_lost += 1;
+                self.pending
+                    .iter()
+                    .enumerate()
+                    .min_by_key(|(_, p)| p.map(|p| p.sent.mono))
+                    .map_or(0, |(i, _)| i)
+            }
+        };
+        self.pending[slot] = Some(query);
+    }
+
+    /// Forgets queries unanswered for longer than `max_round_trip`.
+    fn expire(&mut self, now: Now) {
+        let limit = self.config.max_round_trip;
+        for p in self.pending.iter_mut() {
+            if matches!(p, Some(q) if now.mono.saturating_duration_since(q.sent.mono) > limit) {
+                *p = None;
+                self.stats.queries_lost += 1;
+            }
+        }
+    }
+
+    /// Turns a matched reply into a sample, or says why it is unusable.
+    fn measure(&mut self, query: &Pending, reply: &Reply, t4: Now) -> Result<Sample, ReplyOutcome> {
+        let local = t4
+            .mono
+            .checked_duration_since(query.sent.mono)
+            .ok_or(ReplyOutcome::Absurd)?
+            .as_secs_f64();
+        let t1 = micros(query.sent.wall);
+        let t2 = micros(reply.query_received);
+        let t3 = micros(reply.reply_sent);
+        if t3 < t2 {
+            return Err(ReplyOutcome::Absurd);
+        }
+        let round_trip = local - (t3 - t2) as f64 * 1e-6;
+        if round_trip < -TIMESTAMP_ERROR {
+            return Err(ReplyOutcome::Absurd);
+        }
+        let max = self.config.max_round_trip.as_secs_f64();
+        if round_trip > max || local > max {
+            return Err(ReplyOutcome::TooSlow);
+        }
+        let round_trip = round_trip.max(0.0);
+        // offset = ((t2 − t1) + (t3 − t4)) / 2 with t4 = t1 + local; the integer part exactly.
+        let twice = (t2 - t1) + (t3 - t1);
+        if self.len == 0 && self.suspect.is_none() {
+            self.base_us = i64::try_from(twice / 2).map_err(|_| ReplyOutcome::Absurd)?;
+        }
+        let relative = (twice - 2 * self.base_us as i128) as f64 * 0.5e-6 - local / 2.0;
+        let skew = self.config.max_skew_ppm * 1e-6;
+        Ok(Sample {
+            at: self.secs(query.sent.mono) + local / 2.0,
+            offset: relative,
+            radius: round_trip / 2.0 + TIMESTAMP_ERROR + skew * local,
+            round_trip,
+            round: query.round,
+        })
+    }
+
+    /// Takes a valid sample into the estimate (or holds it as a suspected clock step).
+    fn add(&mut self, sample: Sample, now: Instant) -> ReplyOutcome {
+        if self.len > 0 {
+            let (offset, uncertainty) = self.predict_at(sample.at);
+            if (sample.offset - offset).abs() > uncertainty + sample.radius {
+                return match self.suspect.take() {
+                    Some(held) if self.agree(&held, &sample) => {
+                        self.len = 0;
+                        self.insert(held);
+                        self.insert(sample);
+                        self.refit();
+                        self.last_used = held.at.max(sample.at);
+                        self.stats.clock_steps += 1;
+                        self.start_quick_round(now);
+                        ReplyOutcome::ClockStepped
+                    }
+                    _ => {
+                        self.suspect = Some(sample);
+                        ReplyOutcome::Held
+                    }
+                };
+            }
+        }
+        self.suspect = None;
+        self.insert(sample);
+        self.refit();
+        self.last_used = self.last_used.max(sample.at);
+        ReplyOutcome::Used
+    }
+
+    /// The anchor's prediction at `t`, ignoring staleness.
+    fn predict_at(&self, t: f64) -> (f64, f64) {
+        let a = &self.history[self.anchor];
+        let dt = t - a.at;
+        (
+            a.offset + self.drift * dt,
+            a.radius + self.drift_error * dt.abs(),
+        )
+    }
+
+    /// Whether two samples can both hold under the largest allowed drift.
+    fn agree(&self, a: &Sample, b: &Sample) -> bool {
+        let skew = self.config.max_skew_ppm * 1e-6;
+        (a.offset - b.offset).abs() <= a.radius + b.radius + skew * (a.at - b.at).abs()
+    }
+
+    /// Adds `sample` as its round's best (replacing a worse one), evicting the oldest round
+    /// when the window is full. A late sample of a round older than the newest kept is dropped.
+    fn insert(&mut self, sample: Sample) {
+        if self.len > 0 {
+            let last = &mut self.history[self.len - 1];
+            let newer = sample.round.wrapping_sub(last.round) as i32;
+            if newer == 0 {
+                if sample.radius < last.radius {
+                    *last = sample;
+                }
+                return;
+            }
+            if newer < 0 {
+                return;
+            }
+        }
+        if self.len == self.config.window {
+            self.history.copy_within(1..self.len, 0);
+            self.len -= 1;
+        }
+        self.history[self.len] = sample;
+        self.len += 1;
+    }
+
+    /// Recomputes the drift interval from every pair of kept samples, dropping the oldest
+    /// samples while they contradict the newer ones, and picks the anchor.
+    fn refit(&mut self) {
+        if self.len == 0 {
+            return;
+        }
+        let skew = self.config.max_skew_ppm * 1e-6;
+        let (mut low, mut high) = (-skew, skew);
+        let mut keep_from = self.len - 1;
+        for j in (0..self.len - 1).rev() {
+            let (mut l, mut h) = (low, high);
+            for k in j + 1..self.len {
+                if let Some((pl, ph)) = drift_bounds(&self.history[j], &self.history[k]) {
+                    l = l.max(pl);
+                    h = h.min(ph);
+                }
+            }
+            if l > h {
+                break;
+            }
+            (low, high, keep_from) = (l, h, j);
+        }
+        if keep_from > 0 {
+            self.history.copy_within(keep_from..self.len, 0);
+            self.len -= keep_from;
+        }
+        self.drift = (low + high) / 2.0;
+        self.drift_error = (high - low) / 2.0 + self.config.wander_ppm * 1e-6;
+        // Every sample's uncertainty grows at the same rate after it, so the smallest at any
+        // later time is the smallest `radius − drift_error × at`.
+        let e = self.drift_error;
+        self.anchor = (0..self.len)
+            .min_by(|&x, &y| {
+                let (a, b) = (&self.history[x], &self.history[y]);
+                (a.radius - e * a.at).total_cmp(&(b.radius - e * b.at))
+            })
+            .unwrap_or(0);
+    }
+}
+
+/// The drift interval two samples allow, or `None` if they are too close in time to say much.
+fn drift_bounds(a: &Sample, b: &Sample) -> Option<(f64, f64)> {
+    let (early, late) = if a.at <= b.at { (a, b) } else { (b, a) };
+    let span = late.at - early.at;
+    if span < MIN_PAIR_SPAN {
+        return None;
+    }
+    let change = late.offset - early.offset;
+    let slack = late.radius + early.radius;
+    Some(((change - slack) / span, (change + slack) / span))
+}
+
+/// A time value as microseconds, wide enough that no sum or difference overflows.
+fn micros(t: TimeVal) -> i128 {
+    t.sec as i128 * 1_000_000 + t.usec as i128
+}
+
+/// Microseconds back to a time value, saturating at what `i64` microseconds hold.
+fn to_timeval(us: i128) -> TimeVal {
+    let us = us.clamp(i64::MIN as i128 / 2, i64::MAX as i128 / 2) as i64;
+    TimeVal::from_micros(us)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PEER_AHEAD_US: i64 = 100_000_000; // the peer's clock is 100 s ahead
+
+    fn start() -> Now {
+        Now {
+            mono: Instant::now(),
+            wall: TimeVal::new(1_700_000_000, 250_000),
+        }
+    }
+
+    fn after(now: Now, micros: u64) -> Now {
+        now.plus(Duration::from_micros(micros))
+    }
+
+    /// The reply of a peer `PEER_AHEAD_US` ahead, for a query that took `out` µs to arrive and
+    /// `hold` µs to answer.
+    fn reply(q: &Query, out: i64, hold: i64) -> Reply {
+        let received = TimeVal::from_micros(q.query_sent.as_micros() + PEER_AHEAD_US + out);
+        Reply::answer(q, received, received.plus_secs(hold as f64 * 1e-6))
+    }
+
+    #[test]
+    fn one_exchange_gives_ntp_offset_and_half_the_round_trip() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        assert!(!sync.in_effect(t0));
+        let q = sync.poll_query(t0).unwrap();
+        assert_eq!(q.query_sent, t0.wall);
+        // 1 ms out, 0.5 ms at the peer, 3 ms back: t4 − t1 = 4.5 ms, round trip 4 ms.
+        let t4 = after(t0, 4_500);
+        assert_eq!(
+            sync.handle_reply(&reply(&q, 1_000, 500), t4),
+            ReplyOutcome::Used
+        );
+        let e = sync.estimate(t4).unwrap();
+        // ((t2 − t1) + (t3 − t4)) / 2 = (100.001 + 99.997) / 2 = 99.999 s.
+        assert!((e.offset - 99.999).abs() < 1e-9, "{e:?}");
+        assert!((e.round_trip - 0.004).abs() < 1e-9);
+        // radius 2 ms + 2 µs rounding + 500 ppm × 4.5 ms, and 501 ppm drift error × 2.25 ms.
+        let radius = 0.002 + 2e-6 + 500e-6 * 0.0045;
+        let expected = radius + 501e-6 * 0.00225;
+        assert!((e.uncertainty - expected).abs() < 1e-9, "{e:?}");
+        // The true offset (100 s) is inside: the 2 ms asymmetry costs 1 ms of error.
+        assert!((e.offset - 100.0).abs() <= e.uncertainty);
+        assert_eq!(e.drift_ppm, 0.0);
+        assert_eq!(e.samples, 1);
+        assert!(sync.in_effect(t4));
+    }
+
+    #[test]
+    fn quick_round_then_resync_rounds_with_back_off_while_unanswered() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        assert_eq!(sync.next_deadline(), Some(t0.mono));
+        let mut now = t0;
+        let mut ids = [0u32; 8];
+        for id in ids.iter_mut() {
+            assert_eq!(sync.next_deadline(), Some(now.mono));
+            *id = sync.poll_query(now).unwrap().id;
+            assert!(sync.poll_query(now).is_none(), "one query per deadline");
+            now = after(now, 20_000);
+        }
+        assert!(ids.windows(2).all(|w| w[1] == w[0].wrapping_add(1)));
+        // Nobody answers: 5, 10, 20, 40, then 60 s capped.
+        let mut last = now.mono - Duration::from_millis(20);
+        for gap in [5, 10, 20, 40, 60, 60, 60] {
+            let due = sync.next_deadline().unwrap();
+            assert_eq!(due - last, Duration::from_secs(gap));
+            let at = Now {
+                mono: due,
+                wall: t0.wall,
+            };
+            assert!(sync.poll_query(at).is_some());
+            last = due;
+        }
+        assert_eq!(sync.stats().queries_sent, 15);
+        assert!(sync.stats().queries_lost >= 8);
+    }
+
+    #[test]
+    fn an_answered_peer_is_re_synced_every_interval() {
+        let config = ClockSyncConfig {
+            quick_queries: 2,
+            resync_queries: 3,
+            ..ClockSyncConfig::default()
+        };
+        let t0 = start();
+        let mut sync = ClockSync::new(config, t0);
+        let q = sync.poll_query(t0).unwrap();
+        let t = after(t0, 20_000);
+        assert!(sync.poll_query(t).is_some());
+        assert_eq!(sync.next_deadline(), Some(t.mono + Duration::from_secs(5)));
+        sync.handle_reply(&reply(&q, 300, 10), after(t0, 25_000));
+        // A re-sync round of 3 queries, 20 ms apart, then the plain interval.
+        let mut now = after(t, 5_000_000);
+        for _ in 0..3 {
+            assert!(sync.poll_query(now).is_some());
+            now = after(now, 20_000);
+        }
+        let last = now.mono - Duration::from_millis(20);
+        assert_eq!(sync.next_deadline(), Some(last + Duration::from_secs(5)));
+    }
+
+    #[test]
+    fn a_late_caller_gets_one_query_not_a_burst() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let late = after(t0, 3_000_000);
+        assert!(sync.poll_query(late).is_some());
+        assert!(sync.poll_query(late).is_none());
+        assert_eq!(
+            sync.next_deadline(),
+            Some(late.mono + Duration::from_millis(20))
+        );
+    }
+
+    #[test]
+    fn duplicate_foreign_and_forgotten_replies_are_unmatched() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let q = sync.poll_query(t0).unwrap();
+        let r = reply(&q, 200, 10);
+        let t4 = after(t0, 1_000);
+        // Same id, different t1: another querier's exchange.
+        let mut foreign = r;
+        foreign.query_sent = foreign.query_sent.plus_secs(1e-6);
+        assert_eq!(sync.handle_reply(&foreign, t4), ReplyOutcome::Unmatched);
+        let mut unknown = r;
+        unknown.id = q.id.wrapping_add(1000);
+        assert_eq!(sync.handle_reply(&unknown, t4), ReplyOutcome::Unmatched);
+        assert_eq!(sync.handle_reply(&r, t4), ReplyOutcome::Used);
+        assert_eq!(sync.handle_reply(&r, t4), ReplyOutcome::Unmatched);
+        // A query unanswered for over max_round_trip is forgotten; its late reply is ignored.
+        let now = after(t0, 20_000);
+        let q2 = sync.poll_query(now).unwrap();
+        let much_later = after(now, 1_500_000);
+        assert_eq!(sync.stats().queries_lost, 0);
+        sync.poll_query(much_later); // forgets what expired before sending the next query
+        assert_eq!(sync.stats().queries_lost, 1);
+        assert_eq!(
+            sync.handle_reply(&reply(&q2, 200, 10), much_later),
+            ReplyOutcome::Unmatched
+        );
+        let s = sync.stats();
+        assert_eq!((s.replies_valid, s.replies_unmatched), (1, 4));
+    }
+
+    #[test]
+    fn impossible_and_slow_replies_are_discarded() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        // The peer claims to have sent its reply before receiving the query.
+        let q = sync.poll_query(t0).unwrap();
+        let mut r = reply(&q, 200, 10);
+        r.reply_sent = r.query_received.plus_secs(-1e-6);
+        assert_eq!(
+            sync.handle_reply(&r, after(t0, 1_000)),
+            ReplyOutcome::Absurd
+        );
+        // The peer claims to have held the query longer than the whole round trip took.
+        let now = after(t0, 20_000);
+        let q = sync.poll_query(now).unwrap();
+        assert_eq!(
+            sync.handle_reply(&reply(&q, 200, 5_000), after(now, 1_000)),
+            ReplyOutcome::Absurd
+        );
+        // A round trip over max_round_trip (answered before the query expired).
+        let now = after(now, 20_000);
+        let q = sync.poll_query(now).unwrap();
+        assert_eq!(
+            sync.handle_reply(&reply(&q, 200, 10), after(now, 1_000_100)),
+            ReplyOutcome::TooSlow
+        );
+        assert_eq!(sync.stats().replies_discarded, 3);
+        assert!(!sync.in_effect(after(now, 1_000_100)));
+        // Within the 2 µs rounding allowance a slightly negative round trip is still valid.
+        let now = after(now, 20_000);
+        let q = sync.poll_query(now).unwrap();
+        assert_eq!(
+            sync.handle_reply(&reply(&q, 200, 1_001), after(now, 1_000)),
+            ReplyOutcome::Used
+        );
+    }
+
+    #[test]
+    fn disconnection_forgets_the_peer_and_reconnection_starts_over() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let q = sync.poll_query(t0).unwrap();
+        let t4 = after(t0, 1_000);
+        sync.handle_reply(&reply(&q, 200, 10), t4);
+        let q2 = sync.poll_query(after(t0, 20_000)).unwrap();
+        assert!(sync.in_effect(t4));
+
+        sync.on_disconnected();
+        let t = after(t0, 30_000);
+        assert!(!sync.in_effect(t));
+        assert_eq!(sync.estimate(t), None);
+        assert_eq!(sync.next_deadline(), None);
+        assert!(sync.poll_query(after(t0, 10_000_000)).is_none());
+        let stamp = TimeVal::new(1_700_000_100, 0);
+        assert_eq!(sync.remote_to_local(stamp, t), stamp);
+        // A reply from the old connection matches nothing.
+        assert_eq!(
+            sync.handle_reply(&reply(&q2, 200, 10), t),
+            ReplyOutcome::Unmatched
+        );
+
+        let back = after(t0, 2_000_000);
+        sync.on_connected(back);
+        assert_eq!(sync.next_deadline(), Some(back.mono));
+        let q3 = sync.poll_query(back).unwrap();
+        assert_eq!(q3.id, q2.id.wrapping_add(1), "ids keep counting");
+        assert_eq!(
+            sync.next_deadline(),
+            Some(back.mono + Duration::from_millis(20))
+        );
+        assert!(!sync.in_effect(back));
+        sync.handle_reply(&reply(&q3, 200, 10), after(back, 1_000));
+        assert_eq!(sync.estimate(after(back, 1_000)).unwrap().samples, 1);
+    }
+
+    #[test]
+    fn sync_lapses_when_no_exchange_succeeds_for_stale_after() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let q = sync.poll_query(t0).unwrap();
+        sync.handle_reply(&reply(&q, 200, 10), after(t0, 1_000));
+        assert!(sync.in_effect(after(t0, 30_000_000)));
+        assert!(!sync.in_effect(after(t0, 30_001_000)));
+    }
+
+    #[test]
+    fn translation_applies_the_offset_both_ways() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let q = sync.poll_query(t0).unwrap();
+        // Symmetric 500 µs each way: the measured offset is exactly 100 s.
+        let t4 = after(t0, 1_010);
+        sync.handle_reply(&reply(&q, 500, 10), t4);
+        let e = sync.estimate(t4).unwrap();
+        assert!((e.offset - 100.0).abs() < 1e-9, "{e:?}");
+        let remote = TimeVal::new(1_700_000_100, 300_000);
+        let local = sync.remote_to_local(remote, t4);
+        assert_eq!(local, TimeVal::new(1_700_000_000, 300_000));
+        assert_eq!(sync.local_to_remote(local, t4), remote);
+    }
+
+    #[test]
+    fn translation_follows_the_drift_over_the_age_of_a_timestamp() {
+        let config = ClockSyncConfig {
+            quick_queries: 1,
+            resync_interval: Duration::from_secs(10),
+            ..ClockSyncConfig::default()
+        };
+        let t0 = start();
+        let mut sync = ClockSync::new(config, t0);
+        // Two instantaneous exchanges 10 s apart; the peer gains 1 ms meanwhile (100 ppm).
+        let q = sync.poll_query(t0).unwrap();
+        sync.handle_reply(&reply(&q, 0, 0), t0);
+        let t1 = after(t0, 10_000_000);
+        let q = sync.poll_query(t1).unwrap();
+        let mut r = reply(&q, 0, 0);
+        r.query_received = r.query_received.plus_secs(1e-3);
+        r.reply_sent = r.query_received;
+        assert_eq!(sync.handle_reply(&r, t1), ReplyOutcome::Used);
+        let e = sync.estimate(t1).unwrap();
+        // 1 ms ± 4 µs over 10 s: 99.6..100.4 ppm.
+        assert!((e.drift_ppm - 100.0).abs() < 1e-6, "{e:?}");
+        assert!((e.drift_error_ppm - 1.4).abs() < 1e-6, "{e:?}");
+        assert!((e.offset - 100.001).abs() < 1e-9);
+        // A peer timestamp of 5 s ago: the offset then was 100.0005 s, not 100.001 s.
+        let local_then = t1.wall.plus_secs(-5.0);
+        let remote_then = local_then.plus_secs(100.0005);
+        assert_eq!(sync.remote_to_local(remote_then, t1), local_then);
+        assert_eq!(sync.local_to_remote(local_then, t1), remote_then);
+        // And one 5 s ahead (a peer timestamp in our future).
+        let local_soon = t1.wall.plus_secs(5.0);
+        let remote_soon = local_soon.plus_secs(100.0015);
+        assert_eq!(sync.remote_to_local(remote_soon, t1), local_soon);
+    }
+
+    #[test]
+    fn a_full_table_of_outstanding_queries_forgets_the_oldest() {
+        let config = ClockSyncConfig {
+            quick_queries: 100,
+            max_round_trip: Duration::from_secs(10),
+            ..ClockSyncConfig::default()
+        };
+        let t0 = start();
+        let mut sync = ClockSync::new(config, t0);
+        assert_eq!(sync.config().quick_queries, MAX_PENDING as u32);
+        let mut now = t0;
+        let first = sync.poll_query(now).unwrap();
+        for _ in 1..MAX_PENDING {
+            now = after(now, 20_000);
+            sync.poll_query(now).unwrap();
+        }
+        assert_eq!(sync.stats().queries_lost, 0);
+        // The first query of the next round needs a slot: the oldest query gives up its own.
+        now = after(now, 5_000_000);
+        let last = sync.poll_query(now).unwrap();
+        assert_eq!(sync.stats().queries_lost, 1);
+        let t4 = after(now, 1_000);
+        assert_eq!(
+            sync.handle_reply(&reply(&first, 200, 10), t4),
+            ReplyOutcome::Unmatched
+        );
+        assert_eq!(
+            sync.handle_reply(&reply(&last, 200, 10), t4),
+            ReplyOutcome::Used
+        );
+    }
+
+    #[test]
+    fn configuration_is_brought_into_range() {
+        let c = ClockSyncConfig {
+            quick_queries: 0,
+            resync_interval: Duration::ZERO,
+            resync_queries: 1000,
+            window: 1000,
+            max_silent_interval: Duration::ZERO,
+            max_skew_ppm: f64::NAN,
+            wander_ppm: -3.0,
+            ..ClockSyncConfig::default()
+        }
+        .normalised();
+        assert_eq!(c.quick_queries, 1);
+        assert_eq!(c.resync_interval, Duration::from_millis(1));
+        assert_eq!(c.resync_queries, MAX_PENDING as u32);
+        assert_eq!(c.window, MAX_WINDOW);
+        assert_eq!(c.max_silent_interval, c.resync_interval);
+        assert_eq!(c.max_skew_ppm, 500.0);
+        assert_eq!(c.wander_ppm, 1.0);
+        assert_eq!(
+            ClockSyncConfig::default().normalised(),
+            ClockSyncConfig::default()
+        );
+    }
+
+    #[test]
+    fn drift_is_bounded_by_every_pair_of_samples() {
+        let a = Sample {
+            at: 0.0,
+            offset: 0.0,
+            radius: 1e-3,
+            ..Sample::default()
+        };
+        let b = Sample {
+            at: 10.0,
+            offset: 1e-3,
+            radius: 1e-3,
+            ..Sample::default()
+        };
+        // (1 ms ± 2 ms) over 10 s: −100..+300 ppm, whichever sample comes first.
+        let (low, high) = drift_bounds(&a, &b).unwrap();
+        assert!((low + 100e-6).abs() < 1e-12 && (high - 300e-6).abs() < 1e-12);
+        assert_eq!(drift_bounds(&b, &a), Some((low, high)));
+        let close = Sample { at: 0.0005, ..b };
+        assert_eq!(drift_bounds(&a, &close), None);
+    }
+}
