@@ -46,7 +46,6 @@
 
 #![warn(missing_docs)]
 
-pub mod clock_sync;
 pub mod connection;
 pub mod devices;
 pub use connection::dispatch;

@@ -10,7 +10,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::time::{Duration, Instant};
 
-use vrpn::clock_sync::{
+use vrpn::proto::clock::{
     ClockSync, ClockSyncConfig, ClockSyncStats, Estimate, Query, Reply, ReplyOutcome,
 };
 use vrpn::serial::testing::Rng;

@@ -26,12 +26,15 @@ impl SenderId {
     pub const UNKNOWN: SenderId = SenderId(-1);
 }
 
-/// One message as handlers see it: local ids, the sender's timestamp, the payload, and the
+/// One message as handlers see it: local ids, the timestamps, the payload, and the
 /// connection it arrived on (so a handler can answer without keeping the connection alive).
 #[derive(Clone, Copy, Debug)]
 pub struct Message<'a> {
-    /// The sender's timestamp (never adjusted, as in VRPN 07).
+    /// The sender's timestamp, in local time when clock synchronisation with the sender is in
+    /// effect (see [`Connection::clock_estimate`]); otherwise as the sender stamped it.
     pub time: TimeVal,
+    /// The timestamp as the sender stamped it (its own clock; what logs keep).
+    pub sender_time: TimeVal,
     /// Local sender id, or [`SenderId::UNKNOWN`].
     pub sender: SenderId,
     /// Local type id.
@@ -47,6 +50,13 @@ impl<'a> Message<'a> {
     /// alive for as long as the handler is registered on it.
     pub fn connection(&self) -> &'a Connection {
         self.conn
+    }
+
+    /// When the message arrived here, on the local clock: the time of the `mainloop()` pass
+    /// that read it. A message delivered in-process outside a pass (an in-process server
+    /// reporting to an in-process remote) arrives when it is sent: its own time.
+    pub fn arrived(&self) -> TimeVal {
+        self.conn.pass_time().unwrap_or(self.time)
     }
 }
 
@@ -284,6 +294,7 @@ mod tests {
         let conn = Connection::new_loopback();
         let msg = |s| Message {
             time: TimeVal::ZERO,
+            sender_time: TimeVal::ZERO,
             sender: SenderId(s),
             type_id: TypeId(3),
             payload: &[],

@@ -307,6 +307,34 @@ impl Connection {
         self.inner.clock.now()
     }
 
+    /// The time of the running `mainloop()` pass (read now if nothing in the pass read it
+    /// yet), or `None` outside a pass.
+    pub(crate) fn pass_time(&self) -> Option<TimeVal> {
+        self.inner
+            .clock
+            .in_pass()
+            .then(|| self.inner.clock.now().wall)
+    }
+
+    /// The clock-synchronisation estimate of the peer (a client's server; a server's first
+    /// client), or `None` while sync is not in effect: not yet (the first exchanges take about
+    /// 0.2 s after connecting), stale, off ([`Limits::clock_sync`]), or a peer that does not
+    /// take part — C++ VRPN never does, and its timestamps then pass through unchanged.
+    ///
+    /// `offset` is the peer's clock minus ours in seconds; message times are translated with
+    /// it (`local = sender − offset`), and the true offset lies within `± uncertainty`.
+    pub fn clock_estimate(&self) -> Option<crate::proto::clock::Estimate> {
+        let now = self.now();
+        self.inner.core.borrow().session.clock_estimate(now)
+    }
+
+    /// Each connected peer's address and clock estimate (see
+    /// [`clock_estimate`](Self::clock_estimate)); a server learns each client's clock this way.
+    pub fn peer_clocks(&self) -> Vec<(String, Option<crate::proto::clock::Estimate>)> {
+        let now = self.now();
+        self.inner.core.borrow().session.peer_clocks(now)
+    }
+
     // -------------------------------------------------------------- names
 
     /// Registers (or finds) a sender name and describes it to connected peers.
@@ -438,6 +466,7 @@ impl Connection {
         if self.inner.handlers.has_handlers(type_id) {
             let msg = Message {
                 time,
+                sender_time: time,
                 sender,
                 type_id,
                 payload,
@@ -505,6 +534,7 @@ impl Connection {
                     self.inner.depth.set(1);
                     self.inner.handlers.dispatch(&Message {
                         time,
+                        sender_time: time,
                         sender: SenderId(sender),
                         type_id: TypeId(type_id),
                         payload: &scratch,
@@ -604,6 +634,7 @@ impl Connection {
                 (
                     Some(Delivery::Message {
                         time,
+                        sender_time,
                         sender,
                         type_id,
                         len,
@@ -612,6 +643,7 @@ impl Connection {
                 ) => {
                     self.deliver(&Message {
                         time,
+                        sender_time,
                         sender: SenderId(sender),
                         type_id: TypeId(type_id),
                         payload: &scratch[..len],
@@ -630,31 +662,14 @@ impl Connection {
 
     fn dispatch_delivery(&self, clock: &dyn TimeSource, d: Delivery) {
         match d {
-            Delivery::Message {
-                time,
-                sender,
-                type_id,
-                len,
-            } => {
-                let scratch = self.inner.core.borrow_mut().session.take_scratch();
-                self.deliver(&Message {
-                    time,
-                    sender: SenderId(sender),
-                    type_id: TypeId(type_id),
-                    payload: &scratch[..len],
-                    conn: self,
-                });
-                self.inner
-                    .core
-                    .borrow_mut()
-                    .session
-                    .restore_scratch(scratch);
-            }
+            // Messages are delivered by `pump`, which lends the payload buffer.
+            Delivery::Message { .. } => {}
             Delivery::Event(ev) => {
                 let now = clock.now();
                 self.liveness_event(now, ev);
                 self.deliver(&Message {
                     time: now.wall,
+                    sender_time: now.wall,
                     sender: SenderId(0),
                     type_id: TypeId(ev.type_id()),
                     payload: &[],

@@ -43,6 +43,11 @@ impl PassClock {
         true
     }
 
+    /// True inside a pass.
+    pub(crate) fn in_pass(&self) -> bool {
+        self.in_pass.get()
+    }
+
     /// Ends the pass begun by the matching [`begin`](Self::begin) that returned true.
     pub(crate) fn end(&self) {
         self.in_pass.set(false);

@@ -132,6 +132,8 @@ pub(crate) struct Endpoint {
     pub(crate) log_in: Option<LogSink>,
     /// A call-back connect started by a connection request (coalesced per address).
     pub(crate) callback: bool,
+    /// Clock synchronisation with this peer, once it is connected (and sync is on).
+    pub(crate) clock: Option<Box<super::clock::ClockSync>>,
 }
 
 impl Endpoint {
@@ -164,6 +166,7 @@ impl Endpoint {
             foreign_datagrams: 0,
             log_in: None,
             callback: false,
+            clock: None,
         }
     }
 

@@ -14,6 +14,7 @@
 
 pub mod buffers;
 pub mod client;
+pub mod clock;
 pub mod endpoint;
 pub mod names;
 pub mod ping;
@@ -127,6 +128,10 @@ pub struct Limits {
     /// reached on another interface than the one it asked from (the named address must then be
     /// numeric: the server never resolves host names in its loop).
     pub callback_to_named_address: bool,
+    /// Clock synchronisation with each peer (`None`: off). On by default: between two peers
+    /// of this crate it makes remote timestamps comparable to the local clock; a C++ peer
+    /// never answers, so nothing changes there (it gets one small query a minute).
+    pub clock_sync: Option<clock::ClockSyncConfig>,
 }
 
 impl Default for Limits {
@@ -144,6 +149,7 @@ impl Default for Limits {
             max_requests_per_second: 100,
             max_pending_callbacks: 16,
             callback_to_named_address: false,
+            clock_sync: Some(clock::ClockSyncConfig::default()),
         }
     }
 }
@@ -199,8 +205,11 @@ pub enum IoRequest {
 pub enum Delivery {
     /// A user message; its payload is the session's scratch buffer (`Session::payload`).
     Message {
-        /// The sender's timestamp.
+        /// The sender's timestamp in local time when clock sync with the peer is in effect,
+        /// else as the sender stamped it.
         time: TimeVal,
+        /// The timestamp as the sender stamped it.
+        sender_time: TimeVal,
         /// Local sender id (−1 when the peer never described it).
         sender: i32,
         /// Local type id.

@@ -619,6 +619,7 @@ impl Pair {
                     sender,
                     type_id,
                     len,
+                    ..
                 } => {
                     let s = &self.side(who).session;
                     let sender_name = s

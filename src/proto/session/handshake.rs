@@ -8,13 +8,15 @@
 
 use std::net::{Ipv4Addr, SocketAddrV4};
 
-use super::{Kind, Session};
+use super::{ClockIds, Kind, Session};
 use crate::log::log_cookie_from_peer;
 use crate::proto::client::Failure;
+use crate::proto::clock::ClockSync;
 use crate::proto::endpoint::Phase;
 use crate::proto::{ConnectionEvent, Delivery, IoRequest, PeerId, Severity};
 use crate::time::Now;
 use crate::wire::framing::StreamDecoder;
+use crate::wire::payload::clock;
 use crate::wire::{class, system, Cookie};
 
 impl Session {
@@ -160,5 +162,35 @@ impl Session {
         self.queue
             .push_back(Delivery::Event(ConnectionEvent::GotConnection));
         self.note_state();
+        self.start_clock_sync(now, id);
+    }
+
+    /// Starts clock synchronisation with a peer that just connected.
+    fn start_clock_sync(&mut self, now: Now, id: PeerId) {
+        let Some(config) = self.limits.clock_sync else {
+            return;
+        };
+        if matches!(self.kind, Kind::File(_) | Kind::Loopback) {
+            return;
+        }
+        if let Some(p) = self.peer_mut(id) {
+            p.clock = Some(Box::new(ClockSync::new(config, now)));
+        }
+    }
+
+    /// Registers the clock-synchronisation names (describing them to every peer) the first
+    /// time they are needed: before this side's first query, or when a peer describes them
+    /// (it is about to query). Not earlier, so that a handshake stays byte-for-byte what C++
+    /// sends.
+    pub(super) fn ensure_clock_ids(&mut self, now: Now) -> Option<ClockIds> {
+        if self.clock_ids.is_none() && self.limits.clock_sync.is_some() {
+            let ids = ClockIds {
+                sender: self.register(now, true, clock::SENDER.as_bytes()).ok()?,
+                query: self.register(now, false, clock::QUERY.as_bytes()).ok()?,
+                reply: self.register(now, false, clock::REPLY.as_bytes()).ok()?,
+            };
+            self.clock_ids = Some(ids);
+        }
+        self.clock_ids
     }
 }

@@ -75,6 +75,22 @@ pub(crate) struct Logs {
     pub(crate) any: bool,
 }
 
+/// The local ids of the clock-synchronisation names, registered when the first peer connects
+/// (after the handshake's descriptions, so the handshake stays byte-for-byte C++'s).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ClockIds {
+    pub(crate) sender: i32,
+    pub(crate) query: i32,
+    pub(crate) reply: i32,
+}
+
+impl ClockIds {
+    #[inline]
+    pub(crate) fn is_clock_type(&self, t: i32) -> bool {
+        t == self.query || t == self.reply
+    }
+}
+
 /// Names learned from peers may use the id space up to this many ids below the wire limit;
 /// the rest stays free for this side's own registrations.
 const RESERVED_FOR_LOCAL: usize = 200;
@@ -110,6 +126,10 @@ pub struct Session {
     /// [`poll_timeout`](Session::poll_timeout)'s answer while nothing that sets a deadline has
     /// changed (`None`: work it out again). Every pass asks; few passes change it.
     pub(crate) timeout_cache: std::cell::Cell<Option<Option<Instant>>>,
+    /// Clock-synchronisation names, once registered.
+    pub(crate) clock_ids: Option<ClockIds>,
+    /// A peer described the clock-synchronisation names (register ours before its queries).
+    pub(crate) clock_names_seen: bool,
 }
 
 impl Session {
@@ -140,6 +160,8 @@ impl Session {
             backlogged: None,
             input_pending: true,
             timeout_cache: std::cell::Cell::new(None),
+            clock_ids: None,
+            clock_names_seen: false,
         }
     }
 

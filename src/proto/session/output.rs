@@ -73,6 +73,9 @@ impl Session {
             if let Some(t) = p.deadline {
                 at(t);
             }
+            if let Some(t) = p.clock.as_deref().and_then(|c| c.next_deadline()) {
+                at(t);
+            }
         }
         match &self.kind {
             Kind::Client(c) if self.peers.iter().flatten().next().is_none() => {
@@ -129,6 +132,7 @@ impl Session {
             };
             self.drop_peer(now, id, text, Some(failure));
         }
+        self.send_clock_queries(now);
         let limits = self.limits;
         let idle = self.peers.iter().flatten().next().is_none();
         match &mut self.kind {
@@ -207,5 +211,69 @@ impl Session {
         if let Kind::File(r) = &mut self.kind {
             r.tick(now.now().mono);
         }
+    }
+
+    /// Sends every clock query that is due (each to its own peer only, never logged: it is
+    /// the session's own traffic).
+    fn send_clock_queries(&mut self, now: Now) {
+        let due = self.peers.iter().flatten().any(|p| {
+            p.phase == Phase::Connected
+                && p.clock
+                    .as_deref()
+                    .and_then(|c| c.next_deadline())
+                    .is_some_and(|t| t <= now.mono)
+        });
+        if !due {
+            return;
+        }
+        let Some(ids) = self.ensure_clock_ids(now) else {
+            return;
+        };
+        for p in self.peers.iter_mut().flatten() {
+            if p.phase != Phase::Connected {
+                continue;
+            }
+            let Some(mut c) = p.clock.take() else {
+                continue;
+            };
+            while let Some(q) = c.poll_query(now) {
+                let mut buf = [0u8; crate::wire::payload::clock::Query::LEN];
+                let n = q.encode(&mut buf);
+                let _ = p.pack(
+                    now.wall,
+                    ids.sender,
+                    ids.query,
+                    &buf[..n],
+                    crate::wire::class::LOW_LATENCY,
+                );
+            }
+            p.clock = Some(c);
+        }
+    }
+
+    /// The clock estimate of the first connected peer (a client's server), if sync is in
+    /// effect.
+    pub fn clock_estimate(&self, now: Now) -> Option<crate::proto::clock::Estimate> {
+        self.peers
+            .iter()
+            .flatten()
+            .filter(|p| p.phase == Phase::Connected)
+            .find_map(|p| p.clock.as_deref().and_then(|c| c.estimate(now)))
+    }
+
+    /// Each connected peer's address and clock estimate (`None` while sync is not in effect
+    /// with it: not yet, stale, or a peer that does not answer, such as C++ VRPN).
+    pub fn peer_clocks(&self, now: Now) -> Vec<(String, Option<crate::proto::clock::Estimate>)> {
+        self.peers
+            .iter()
+            .flatten()
+            .filter(|p| p.phase == Phase::Connected && !self.is_replay_peer(p))
+            .map(|p| {
+                (
+                    p.label.clone(),
+                    p.clock.as_deref().and_then(|c| c.estimate(now)),
+                )
+            })
+            .collect()
     }
 }

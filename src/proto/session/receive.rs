@@ -7,6 +7,7 @@ use crate::proto::endpoint::{Phase, RemoteNames};
 use crate::proto::names::NameLimit;
 use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, Severity};
 use crate::time::TimeSource;
+use crate::wire::payload::clock::{Query, Reply};
 use crate::wire::{self, system, MAX_IDS};
 
 /// Where a message came from, for the rules that depend on it.
@@ -112,13 +113,16 @@ impl Session {
                 Some(Ok((h, payload))) => {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
-                    match self.handle_message(slot, h, len, Via::Tcp) {
+                    match self.handle_message(slot, h, len, Via::Tcp, now) {
                         Outcome::Deliver(d) => return Some(d),
                         Outcome::Drop(reason) => {
                             self.drop_peer(now.now(), id, reason, None);
                             return self.queue.pop_front();
                         }
                         Outcome::Continue => {
+                            if self.clock_names_seen && self.clock_ids.is_none() {
+                                self.ensure_clock_ids(now.now());
+                            }
                             if !self.queue.is_empty() || !self.to_describe.is_empty() {
                                 return None;
                             }
@@ -169,7 +173,7 @@ impl Session {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
                     inbox.advance(advance);
-                    match self.handle_message(slot, h, len, Via::Udp) {
+                    match self.handle_message(slot, h, len, Via::Udp, now) {
                         Outcome::Deliver(d) => return Some(d),
                         Outcome::Drop(reason) => {
                             self.drop_peer(now.now(), id, reason, None);
@@ -240,7 +244,7 @@ impl Session {
                 type_id: due.header.type_id,
                 seq: 0,
             };
-            match self.handle_message(0, h, len, Via::Log) {
+            match self.handle_message(0, h, len, Via::Log, now) {
                 Outcome::Deliver(d) => return Some(d),
                 Outcome::Drop(text) => self.notice(Severity::Warning, text),
                 Outcome::Continue => {}
@@ -256,12 +260,20 @@ impl Session {
 
     /// Interprets one message whose payload is in `scratch[..len]`: system messages update
     /// tables; user messages are translated and returned for delivery.
-    fn handle_message(&mut self, slot: usize, h: wire::Header, len: usize, via: Via) -> Outcome {
+    fn handle_message(
+        &mut self,
+        slot: usize,
+        h: wire::Header,
+        len: usize,
+        via: Via,
+        now: &dyn TimeSource,
+    ) -> Outcome {
         let Session {
             peers,
             logs,
             scratch,
             limits,
+            clock_ids,
             ..
         } = self;
         let Some(p) = peers[slot].as_mut() else {
@@ -339,9 +351,29 @@ impl Session {
                 if local_type < 0 {
                     return Outcome::Continue; // never described: ignored, as C++ does
                 }
+                if let Some(ids) = clock_ids.filter(|ids| ids.is_clock_type(local_type)) {
+                    if via != Via::Log {
+                        return self.handle_clock_message(slot, ids, local_type, len, now);
+                    }
+                    return Outcome::Continue;
+                }
                 let local_sender = p.senders.lookup(h.sender);
+                // In local time when the peer's clock is known (a cheap test first: a peer that
+                // never answered, a C++ one, costs nothing here).
+                let time = match p.clock.as_deref() {
+                    Some(c) if c.has_estimate() => {
+                        let now = now.now();
+                        if c.in_effect(now) {
+                            c.remote_to_local(h.time, now)
+                        } else {
+                            h.time
+                        }
+                    }
+                    _ => h.time,
+                };
                 Outcome::Deliver(Delivery::Message {
-                    time: h.time,
+                    time,
+                    sender_time: h.time,
                     sender: local_sender,
                     type_id: local_type,
                     len,
@@ -362,6 +394,7 @@ impl Session {
             to_describe,
             queue,
             names_refused,
+            clock_names_seen,
             ..
         } = self;
         let Some(p) = peers[slot].as_mut() else {
@@ -379,6 +412,14 @@ impl Session {
             Ok(n) => n,
             Err(e) => return Outcome::Drop(format!("bad description from {}: {e}", p.label)),
         };
+        if !is_sender
+            && (name == wire::payload::clock::QUERY.as_bytes()
+                || name == wire::payload::clock::REPLY.as_bytes())
+        {
+            // A peer that takes part in clock synchronisation: our names must exist before
+            // its first query arrives (right after this description).
+            *clock_names_seen = true;
+        }
         let completes = !is_sender && !p.senders_complete;
         if completes {
             p.senders_complete = true;
@@ -445,6 +486,48 @@ impl Session {
             let own = !p.senders_complete || !names.senders.is_registered(local);
             if own && p.offered.insert(local) {
                 return Outcome::Deliver(Delivery::PeerSender(local));
+            }
+        }
+        Outcome::Continue
+    }
+
+    /// A clock query (answered to this peer only, with the time it arrived and the time the
+    /// answer leaves) or a reply (given to this peer's estimator). Never delivered to handlers.
+    fn handle_clock_message(
+        &mut self,
+        slot: usize,
+        ids: super::ClockIds,
+        local_type: i32,
+        len: usize,
+        now: &dyn TimeSource,
+    ) -> Outcome {
+        let payload = &self.scratch[..len];
+        let Some(p) = self.peers[slot].as_mut() else {
+            return Outcome::Continue;
+        };
+        if local_type == ids.query {
+            // A foreign or future layout is ignored, never a reason to drop the peer.
+            let Ok(q) = Query::decode(payload) else {
+                return Outcome::Continue;
+            };
+            let at = now.now().wall;
+            let reply = Reply::answer(&q, at, at);
+            let mut buf = [0u8; Reply::LEN];
+            let n = reply.encode(&mut buf);
+            let _ = p.pack(
+                at,
+                ids.sender,
+                ids.reply,
+                &buf[..n],
+                crate::wire::class::LOW_LATENCY,
+            );
+        } else if local_type == ids.reply {
+            let Ok(r) = Reply::decode(payload) else {
+                return Outcome::Continue;
+            };
+            if let Some(c) = p.clock.as_deref_mut() {
+                c.handle_reply(&r, now.now());
+                self.timeouts_changed();
             }
         }
         Outcome::Continue

@@ -1,6 +1,6 @@
 //! Clock-synchronisation messages: a query and its reply, carrying NTP's timestamps so that the
 //! querier can estimate the offset between its clock and the responder's (see
-//! [`crate::clock_sync`] for the estimator).
+//! [`crate::proto::clock`] for the estimator).
 //!
 //! # The exchange
 //!

@@ -440,6 +440,13 @@ impl ClockSync {
         })
     }
 
+    /// Whether an estimate exists at all (a cheap test before [`in_effect`](Self::in_effect),
+    /// which also checks that it is not stale and needs the time for that).
+    #[inline]
+    pub fn has_estimate(&self) -> bool {
+        self.connected && self.len > 0
+    }
+
     /// Whether sync is in effect at `now`: at least one valid exchange on this connection and
     /// one within `stale_after`. (It takes `now` because staleness is a matter of time.)
     pub fn in_effect(&self, now: Now) -> bool {
