@@ -120,7 +120,8 @@ pub struct Limits {
     /// Server: connection requests (UDP) accepted per second, over all sources; the rest are
     /// ignored and counted in a notice at most every few seconds.
     pub max_requests_per_second: u32,
-    /// Server: call-back connects in progress at once.
+    /// Server: call-back connects in progress at once. When a new request finds them all
+    /// still connecting, the oldest is given up (its host may be dropping SYNs).
     pub max_pending_callbacks: usize,
     /// Server: call back the address a connection request names instead of the address it
     /// came from. C++ does this; it lets anyone aim the server's connects at a third host, so

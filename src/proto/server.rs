@@ -10,7 +10,9 @@
 //!   is still greeting, further requests for it are ignored (a waiting client re-sends every
 //!   second);
 //! - is rate-limited ([`Limits::max_requests_per_second`], a token bucket) and bounded in
-//!   flight ([`Limits::max_pending_callbacks`]);
+//!   flight ([`Limits::max_pending_callbacks`]); when that many call-backs are still connecting
+//!   (a host that drops SYNs makes them hang), the oldest is given up for the new one, so
+//!   hanging call-backs cannot shut out a client whose call-back completes in a round trip;
 //! - is never resolved: a named host that is not a dotted quad is not looked up in the loop.
 //!
 //! Ignored requests are counted and reported in one notice at most every
@@ -55,11 +57,18 @@ pub(crate) struct IgnoredCounts {
     pub(crate) duplicate: u32,
     pub(crate) pending: u32,
     pub(crate) full: u32,
+    /// Hanging call-backs given up to make room for new ones.
+    pub(crate) abandoned: u32,
 }
 
 impl IgnoredCounts {
     fn total(&self) -> u32 {
-        self.malformed + self.rate_limited + self.duplicate + self.pending + self.full
+        self.malformed
+            + self.rate_limited
+            + self.duplicate
+            + self.pending
+            + self.full
+            + self.abandoned
     }
 }
 
@@ -160,6 +169,11 @@ impl RequestPolicy {
         false
     }
 
+    /// Counts a call-back given up unfinished to make room for a newer one.
+    pub(crate) fn count_abandoned(&mut self) {
+        self.ignored.abandoned += 1;
+    }
+
     /// A summary of what was ignored, when one is due. Duplicates alone are normal (clients
     /// re-send every second while their call-back is in progress) and not reported.
     pub(crate) fn summary(&mut self, now: Instant) -> Option<String> {
@@ -190,6 +204,11 @@ impl RequestPolicy {
                 "while the server was full (Limits::max_connections)",
             ),
             (c.duplicate, "for a call-back already in progress"),
+            (
+                c.abandoned,
+                "whose call-backs were still connecting when newer ones needed room \
+                 (Limits::max_pending_callbacks)",
+            ),
             (c.malformed, "that were not connection requests"),
         ] {
             if n > 0 {

@@ -67,6 +67,12 @@ impl Session {
             // Full: the peer greeting longest gives way, as for a TCP connection.
             self.evict_greeting_peer(now);
         }
+        if !busy && self.pending_callbacks() >= limits.max_pending_callbacks {
+            // Call-backs that hang (a host that drops SYNs) must not hold every slot until
+            // their connect times out: the oldest gives way. A real call-back completes in a
+            // round trip, long before a rate-limited flood can push it out.
+            self.abandon_oldest_callback();
+        }
         let (pending, live) = (self.pending_callbacks(), self.live_peers());
         let Kind::Server(policy) = &mut self.kind else {
             return;
@@ -105,6 +111,28 @@ impl Session {
         );
         self.drop_peer(now, id, text, None);
         true
+    }
+
+    /// Gives up the call-back that has been connecting longest, without a notice of its own
+    /// (the request summary counts it).
+    fn abandon_oldest_callback(&mut self) {
+        let oldest = self
+            .peers
+            .iter()
+            .flatten()
+            .filter(|p| p.callback && p.phase == Phase::Connecting)
+            .min_by_key(|p| p.deadline)
+            .map(|p| p.id);
+        let Some(id) = oldest else {
+            return;
+        };
+        if let Some(slot) = self.peers.get_mut(id.slot) {
+            *slot = None;
+        }
+        self.io.push_back(IoRequest::Close { peer: id });
+        if let Kind::Server(policy) = &mut self.kind {
+            policy.count_abandoned();
+        }
     }
 
     pub(super) fn request_summary(&mut self, now: Instant) {
