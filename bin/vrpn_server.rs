@@ -12,7 +12,7 @@ use vrpn::devices::base::set_print_threshold;
 use vrpn::server::config::{self, DeviceEntry};
 use vrpn::server::options::USAGE;
 use vrpn::server::{build_devices, parse_args, BuildNote, ServerCommand, ServerLoop};
-use vrpn::{Connection, TextSeverity};
+use vrpn::{Connection, Limits, TextSeverity};
 
 use output::{errln, outln};
 
@@ -46,7 +46,11 @@ fn main() -> ExitCode {
     for clash in config::name_clashes(&entries) {
         errln!("{PROGRAM}: warning: {clash}");
     }
-    let conn = match Connection::server(opts.nic, opts.port) {
+    let limits = Limits {
+        callback_to_named_address: opts.callback_to_named_address,
+        ..Limits::default()
+    };
+    let conn = match Connection::server_with_limits(opts.nic, opts.port, limits) {
         Ok(c) => c,
         Err(e) => {
             errln!("{PROGRAM}: {e}");

@@ -42,6 +42,10 @@ pub struct ServerOptions {
     pub flush_logs: bool,
     /// Listen port (default 3883; 0 picks a free one and prints it).
     pub port: u16,
+    /// Call clients back at the address their connection request names rather than the
+    /// address it came from (`-callbacknamed`; multi-homed clients that ask from one interface
+    /// and listen on another). Off by default: see `Limits::callback_to_named_address`.
+    pub callback_to_named_address: bool,
 }
 
 impl Default for ServerOptions {
@@ -60,6 +64,7 @@ impl Default for ServerOptions {
             log_out: None,
             flush_logs: false,
             port: crate::wire::DEFAULT_PORT,
+            callback_to_named_address: false,
         }
     }
 }
@@ -77,7 +82,7 @@ pub enum ServerCommand {
 
 /// Usage text.
 pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millisleep N] \
-[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [PORT]
+[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-callbacknamed] [PORT]
        vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
@@ -89,6 +94,8 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millis
   -li FILE        log incoming messages to FILE
   -lo FILE        log outgoing messages to FILE
   -flush          flush logs on every pass
+  -callbacknamed  call UDP-path clients back at the (numeric) address their request
+                  names, not the address it came from (multi-homed clients only)
   PORT            UDP and TCP port to listen on (default 3883; 0 picks a free one)
   -h, --help      print this help
   --version       print the version";
@@ -109,6 +116,7 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-v" => o.verbose = true,
             "-q" => o.quit_after_last = true,
             "-flush" => o.flush_logs = true,
+            "-callbacknamed" => o.callback_to_named_address = true,
             "-li" => o.log_in = Some(value("-li")?),
             "-lo" => o.log_out = Some(value("-lo")?),
             "-NIC" => {
@@ -176,6 +184,8 @@ mod tests {
         assert_eq!(o.log_in.as_deref(), Some("in.vrpn"));
         assert_eq!(o.log_out.as_deref(), Some("out.vrpn"));
         assert!(o.flush_logs);
+        assert!(!o.callback_to_named_address);
+        assert!(serve("-callbacknamed").callback_to_named_address);
         assert!(
             matches!(o.sleep, SleepPolicy::EventDriven { max_block, .. } if max_block == Duration::from_millis(5))
         );
