@@ -57,7 +57,8 @@ impl ReplayControl<'_> {
     /// Sets the speed: 1.0 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as
     /// fast as possible.
     pub fn set_rate(&self, rate: f64) {
-        self.conn.with_replay(|r| r.set_rate(rate));
+        let now = self.conn.now().mono;
+        self.conn.with_replay(|r| r.set_rate(rate, now));
     }
 
     /// The speed factor.

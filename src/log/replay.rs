@@ -203,11 +203,10 @@ impl Replay {
         self.eof
     }
 
-    /// Sets the speed: 1 real time, 0 paused, 10 ten times faster, `f64::INFINITY` as fast
-    /// as possible. Time so far is accumulated at the old rate.
-    pub fn set_rate(&mut self, rate: f64) {
+    /// Sets the speed at `now` (the caller's clock): 1 real time, 0 paused, 10 ten times
+    /// faster, `f64::INFINITY` as fast as possible. Time so far is accumulated at the old rate.
+    pub fn set_rate(&mut self, rate: f64, now: Instant) {
         if let Some(last) = self.last_wall {
-            let now = Instant::now();
             self.accum += now.duration_since(last).as_secs_f64() * self.rate;
             self.last_wall = Some(now);
         }
