@@ -24,6 +24,58 @@ struct Legit {
     tracker: TrackerRemote,
     poses: Rc<Cell<u64>>,
     fake: Rc<Cell<u64>>,
+    _watcher: Option<Watcher>,
+}
+
+/// An outside client run beside ours when `VRPN_HOSTILE_WATCHER` names a command (for checks by
+/// hand, e.g. another implementation's `vrpn_print_devices Tracker0@127.0.0.1:{port}`): it runs
+/// for the whole attack and the lines it printed are counted when it is stopped.
+struct Watcher {
+    child: std::process::Child,
+    lines: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    started: Instant,
+}
+
+impl Watcher {
+    fn start(port: u16) -> Option<Watcher> {
+        use std::io::BufRead;
+        let command = std::env::var("VRPN_HOSTILE_WATCHER").ok()?;
+        let command = command.replace("{port}", &port.to_string());
+        let mut words = command.split_whitespace();
+        let mut child = std::process::Command::new(words.next()?)
+            .args(words)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("VRPN_HOSTILE_WATCHER command");
+        let out = child.stdout.take()?;
+        let lines = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let l = lines.clone();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(out).lines() {
+                if line.is_ok_and(|t| t.contains("pos")) {
+                    l.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            }
+        });
+        Some(Watcher {
+            child,
+            lines,
+            started: Instant::now(),
+        })
+    }
+}
+
+impl Drop for Watcher {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        eprintln!(
+            "outside watcher: {} pose lines in {:.1} s",
+            self.lines.load(std::sync::atomic::Ordering::Relaxed),
+            self.started.elapsed().as_secs_f64()
+        );
+    }
 }
 
 impl Legit {
@@ -44,6 +96,7 @@ impl Legit {
             tracker,
             poses,
             fake,
+            _watcher: Watcher::start(port),
         }
     }
 
