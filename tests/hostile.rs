@@ -48,7 +48,7 @@ impl Watcher {
             .stderr(std::process::Stdio::null())
             .spawn()
             .expect("VRPN_HOSTILE_WATCHER command");
-        let out = child.stdout.take()?;
+        let out = child.stdout.take().expect("piped stdout");
         let lines = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
         let l = lines.clone();
         std::thread::spawn(move || {
