@@ -457,14 +457,20 @@ impl ClockSync {
     /// the moment the timestamp refers to (drift applied over its age). Returns `remote`
     /// unchanged while sync is not in effect.
     pub fn remote_to_local(&self, remote: TimeVal, now: Now) -> TimeVal {
-        let Some(offset_now) = self.offset_micros(now) else {
-            return remote;
-        };
-        let remote_us = micros(remote);
-        let local_guess = remote_us - offset_now as i128;
-        let age = (micros(now.wall) - local_guess) as f64;
-        let offset = offset_now as f64 - self.drift * age;
-        to_timeval(remote_us - offset.round() as i128)
+        self.translation(now)
+            .map_or(remote, |t| t.remote_to_local(remote))
+    }
+
+    /// The translation [`remote_to_local`](Self::remote_to_local) applies at `now`, worked out
+    /// once so that the many messages of one `mainloop()` pass share it. `None` while sync is
+    /// not in effect.
+    pub fn translation(&self, now: Now) -> Option<Translation> {
+        let now_us = micros(now.wall).clamp(i64::MIN as i128, i64::MAX as i128) as i64;
+        Some(Translation::new(
+            self.offset_micros(now)?,
+            now_us,
+            self.drift,
+        ))
     }
 
     /// The peer's time of a local timestamp, at `now`: the inverse of
@@ -730,6 +736,66 @@ fn drift_bounds(a: &Sample, b: &Sample) -> Option<(f64, f64)> {
 /// A time value as microseconds, wide enough that no sum or difference overflows.
 fn micros(t: TimeVal) -> i128 {
     t.sec as i128 * 1_000_000 + t.usec as i128
+}
+
+/// Peer-to-local time translation fixed at one moment (see [`ClockSync::translation`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Translation {
+    /// The offset at that moment, in microseconds, and split into seconds and microseconds
+    /// (0..1_000_000) so that translating needs no division.
+    offset_us: i64,
+    offset_sec: i64,
+    offset_usec: i64,
+    /// That moment on the local wall clock, in microseconds.
+    now_us: i64,
+    /// Drift of the offset, seconds per second.
+    drift: f64,
+}
+
+impl Translation {
+    fn new(offset_us: i64, now_us: i64, drift: f64) -> Translation {
+        Translation {
+            offset_us,
+            offset_sec: offset_us.div_euclid(1_000_000),
+            offset_usec: offset_us.rem_euclid(1_000_000),
+            now_us,
+            drift,
+        }
+    }
+
+    /// The local time of a peer timestamp: `remote − offset`, the offset taken at the moment
+    /// the timestamp refers to (drift applied over its age).
+    ///
+    /// This runs for every message from a synchronised peer, so it avoids divisions and the
+    /// library call behind `f64::round` (halves round away from zero, as `round` does).
+    pub fn remote_to_local(&self, remote: TimeVal) -> TimeVal {
+        let remote_us = remote
+            .sec
+            .saturating_mul(1_000_000)
+            .saturating_add(remote.usec);
+        let age = self
+            .now_us
+            .saturating_sub(remote_us.saturating_sub(self.offset_us)) as f64;
+        // The offset was smaller by drift × age when the timestamp was taken.
+        let back = self.drift * age;
+        let back = if back >= 0.0 {
+            (back + 0.5) as i64
+        } else {
+            (back - 0.5) as i64
+        };
+        let usec = remote.usec - self.offset_usec + back;
+        let sec = remote.sec.saturating_sub(self.offset_sec);
+        if (0..1_000_000).contains(&usec) {
+            TimeVal { sec, usec }
+        } else if (-1_000_000..0).contains(&usec) {
+            TimeVal {
+                sec: sec.saturating_sub(1),
+                usec: usec + 1_000_000,
+            }
+        } else {
+            TimeVal::from_micros(sec.saturating_mul(1_000_000).saturating_add(usec))
+        }
+    }
 }
 
 /// Microseconds back to a time value, saturating at what `i64` microseconds hold.

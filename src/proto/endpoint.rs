@@ -134,6 +134,10 @@ pub(crate) struct Endpoint {
     pub(crate) callback: bool,
     /// Clock synchronisation with this peer, once it is connected (and sync is on).
     pub(crate) clock: Option<Box<super::clock::ClockSync>>,
+    /// The clock translation of the current pass, so that a burst of messages works out the
+    /// estimate (and reads the pass clock) once. Cleared at each pass and when a reply changes
+    /// the estimate.
+    pub(crate) clock_pass: Option<Option<super::clock::Translation>>,
 }
 
 impl Endpoint {
@@ -167,6 +171,7 @@ impl Endpoint {
             log_in: None,
             callback: false,
             clock: None,
+            clock_pass: None,
         }
     }
 

@@ -207,6 +207,7 @@ impl Session {
                 self.input_pending = true;
             }
             p.budget = 0;
+            p.clock_pass = None;
         }
         if let Kind::File(r) = &mut self.kind {
             r.tick(now.now().mono);

@@ -362,12 +362,11 @@ impl Session {
                 // never answered, a C++ one, costs nothing here).
                 let time = match p.clock.as_deref() {
                     Some(c) if c.has_estimate() => {
-                        let now = now.now();
-                        if c.in_effect(now) {
-                            c.remote_to_local(h.time, now)
-                        } else {
-                            h.time
-                        }
+                        let translation = match p.clock_pass {
+                            Some(t) => t,
+                            None => *p.clock_pass.insert(c.translation(now.now())),
+                        };
+                        translation.map_or(h.time, |t| t.remote_to_local(h.time))
                     }
                     _ => h.time,
                 };
@@ -527,6 +526,7 @@ impl Session {
             };
             if let Some(c) = p.clock.as_deref_mut() {
                 c.handle_reply(&r, now.now());
+                p.clock_pass = None;
                 self.timeouts_changed();
             }
         }
