@@ -473,6 +473,26 @@ impl ClockSync {
         ))
     }
 
+    /// [`translation`](Self::translation) at `now`, and the monotonic moment until which it
+    /// may be reused. The estimate is a straight line in time, and a translation applies it
+    /// to each timestamp's own moment, so one worked out earlier gives the same local times
+    /// (to the microsecond) until a reply changes the estimate or the estimate goes stale;
+    /// reusing it spares every `mainloop()` pass the floating-point work. The moment is
+    /// capped at [`TRANSLATION_REUSE`] from `now` so that a stepped wall clock is followed.
+    pub fn translation_until(&self, now: Now) -> (Option<Translation>, Instant) {
+        let mut until = now.mono + TRANSLATION_REUSE;
+        let translation = self.translation(now);
+        if translation.is_some() {
+            let stale_at = Duration::try_from_secs_f64(self.last_used)
+                .ok()
+                .and_then(|d| self.epoch.checked_add(d + self.config.stale_after));
+            if let Some(stale_at) = stale_at {
+                until = until.min(stale_at);
+            }
+        }
+        (translation, until)
+    }
+
     /// The peer's time of a local timestamp, at `now`: the inverse of
     /// [`remote_to_local`](Self::remote_to_local). Returns `local` unchanged while sync is not in
     /// effect.
@@ -737,6 +757,10 @@ fn drift_bounds(a: &Sample, b: &Sample) -> Option<(f64, f64)> {
 fn micros(t: TimeVal) -> i128 {
     t.sec as i128 * 1_000_000 + t.usec as i128
 }
+
+/// How long a [`Translation`] may be reused before it is worked out again (see
+/// [`ClockSync::translation_until`]).
+pub const TRANSLATION_REUSE: Duration = Duration::from_millis(250);
 
 /// Peer-to-local time translation fixed at one moment (see [`ClockSync::translation`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -1087,6 +1111,38 @@ mod tests {
         let local_soon = t1.wall.plus_secs(5.0);
         let remote_soon = local_soon.plus_secs(100.0015);
         assert_eq!(sync.remote_to_local(remote_soon, t1), local_soon);
+
+        // A translation worked out earlier and reused gives the fresh one's local times,
+        // until its reuse limit.
+        let (early, until) = sync.translation_until(t1);
+        let early = early.expect("in effect");
+        assert_eq!(until, t1.mono + TRANSLATION_REUSE);
+        let t2 = after(t1, 200_000);
+        for age_ms in [0i64, 3, 150, 4_000] {
+            let local = t2.wall.plus_secs(-(age_ms as f64) * 1e-3);
+            let remote = sync.local_to_remote(local, t2);
+            let fresh = sync.remote_to_local(remote, t2);
+            let reused = early.remote_to_local(remote);
+            assert!(
+                (fresh.as_micros() - reused.as_micros()).abs() <= 1,
+                "{age_ms} ms: {fresh} vs {reused}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_reused_translation_ends_when_the_estimate_goes_stale() {
+        let t0 = start();
+        let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+        let q = sync.poll_query(t0).unwrap();
+        sync.handle_reply(&reply(&q, 200, 10), after(t0, 1_000));
+        let near_end = after(t0, 29_900_000);
+        let (t, until) = sync.translation_until(near_end);
+        assert!(t.is_some());
+        // Stale 30 s after the sample (taken half-way through the 1 ms exchange).
+        assert_eq!(until, after(t0, 30_000_500).mono);
+        let (t, _) = sync.translation_until(after(t0, 30_001_000));
+        assert!(t.is_none());
     }
 
     #[test]

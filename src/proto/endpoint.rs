@@ -134,10 +134,10 @@ pub(crate) struct Endpoint {
     pub(crate) callback: bool,
     /// Clock synchronisation with this peer, once it is connected (and sync is on).
     pub(crate) clock: Option<Box<super::clock::ClockSync>>,
-    /// The clock translation of the current pass, so that a burst of messages works out the
-    /// estimate (and reads the pass clock) once. Cleared at each pass and when a reply changes
-    /// the estimate.
-    pub(crate) clock_pass: Option<Option<super::clock::Translation>>,
+    /// The clock translation in use and the moment until which it holds, so that messages
+    /// work out the estimate only a few times a second. Cleared when a reply changes the
+    /// estimate.
+    pub(crate) clock_pass: Option<(Option<super::clock::Translation>, std::time::Instant)>,
 }
 
 impl Endpoint {

@@ -207,7 +207,13 @@ impl Session {
                 self.input_pending = true;
             }
             p.budget = 0;
-            p.clock_pass = None;
+            // A clock translation is reused until its limit (checked once a pass, not per
+            // message).
+            if let Some((_, until)) = p.clock_pass {
+                if now.now().mono >= until {
+                    p.clock_pass = None;
+                }
+            }
         }
         if let Kind::File(r) = &mut self.kind {
             r.tick(now.now().mono);

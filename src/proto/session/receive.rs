@@ -363,8 +363,12 @@ impl Session {
                 let time = match p.clock.as_deref() {
                     Some(c) if c.has_estimate() => {
                         let translation = match p.clock_pass {
-                            Some(t) => t,
-                            None => *p.clock_pass.insert(c.translation(now.now())),
+                            Some((t, _)) => t,
+                            None => {
+                                let (t, until) = c.translation_until(now.now());
+                                p.clock_pass = Some((t, until));
+                                t
+                            }
                         };
                         translation.map_or(h.time, |t| t.remote_to_local(h.time))
                     }
