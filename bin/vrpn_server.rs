@@ -35,6 +35,10 @@ fn main() -> ExitCode {
         }
     };
     signals::install();
+    if let Some(shift) = opts.clock_shift {
+        vrpn::time::shift_wall_clock(shift);
+        errln!("{PROGRAM}: stamping messages {shift:+} s off this host's clock (-clockshift)");
+    }
     if opts.verbose {
         set_print_threshold(TextSeverity::Normal);
     }

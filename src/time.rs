@@ -5,7 +5,25 @@
 //! `i64` so arithmetic never overflows; header seconds are decoded as unsigned 32-bit (what a
 //! 64-bit C++ peer does) and payload timevals as signed.
 
+use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// Microseconds added to every wall-clock reading of this process (see [`shift_wall_clock`]).
+static WALL_CLOCK_SHIFT_US: AtomicI64 = AtomicI64::new(0);
+
+/// Makes this process's wall clock read `seconds` ahead of the system's (behind when
+/// negative), as a host whose clock is off would: every message this process stamps from
+/// then on carries the shifted time. For tests and demonstrations of clock synchronisation
+/// (`vrpn_server -clockshift SECONDS`); the monotonic clock that orders deadlines is not
+/// touched.
+pub fn shift_wall_clock(seconds: f64) {
+    let us = if seconds.is_finite() {
+        (seconds * 1e6).round() as i64
+    } else {
+        0
+    };
+    WALL_CLOCK_SHIFT_US.store(us, Ordering::Relaxed);
+}
 
 /// One reading of both clocks, taken once per loop pass by the shell (or by a test's virtual
 /// clock) and passed down to everything below it.
@@ -78,14 +96,19 @@ impl TimeVal {
         TimeVal { sec, usec }.normalised()
     }
 
-    /// The current wall-clock time, as C++ `vrpn_gettimeofday` reads it.
+    /// The current wall-clock time, as C++ `vrpn_gettimeofday` reads it (moved by
+    /// [`shift_wall_clock`] when a test asked for that).
     pub fn now() -> TimeVal {
         let d = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .unwrap_or(Duration::ZERO);
-        TimeVal {
+        let read = TimeVal {
             sec: d.as_secs() as i64,
             usec: d.subsec_micros() as i64,
+        };
+        match WALL_CLOCK_SHIFT_US.load(Ordering::Relaxed) {
+            0 => read,
+            shift => TimeVal::from_micros(read.as_micros() + shift),
         }
     }
 

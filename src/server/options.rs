@@ -46,6 +46,10 @@ pub struct ServerOptions {
     /// address it came from (`-callbacknamed`; multi-homed clients that ask from one interface
     /// and listen on another). Off by default: see `Limits::callback_to_named_address`.
     pub callback_to_named_address: bool,
+    /// Seconds this process's wall clock is moved ahead (`-clockshift S`): makes the server
+    /// stamp its messages as a host whose clock is off would, to see clock synchronisation
+    /// at work. See [`crate::time::shift_wall_clock`].
+    pub clock_shift: Option<f64>,
 }
 
 impl Default for ServerOptions {
@@ -65,6 +69,7 @@ impl Default for ServerOptions {
             flush_logs: false,
             port: crate::wire::DEFAULT_PORT,
             callback_to_named_address: false,
+            clock_shift: None,
         }
     }
 }
@@ -82,7 +87,7 @@ pub enum ServerCommand {
 
 /// Usage text.
 pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millisleep N] \
-[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-callbacknamed] [PORT]
+[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-callbacknamed] [-clockshift S] [PORT]
        vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
@@ -96,6 +101,8 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millis
   -flush          flush logs on every pass
   -callbacknamed  call UDP-path clients back at the (numeric) address their request
                   names, not the address it came from (multi-homed clients only)
+  -clockshift S   stamp messages as if this host's clock were S seconds ahead (to
+                  watch clients synchronise their clocks to it; not for production)
   PORT            UDP and TCP port to listen on (default 3883; 0 picks a free one)
   -h, --help      print this help
   --version       print the version";
@@ -117,6 +124,15 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-q" => o.quit_after_last = true,
             "-flush" => o.flush_logs = true,
             "-callbacknamed" => o.callback_to_named_address = true,
+            "-clockshift" => {
+                let v = value("-clockshift")?;
+                let s: f64 = v
+                    .parse()
+                    .ok()
+                    .filter(|s: &f64| s.is_finite())
+                    .ok_or_else(|| format!("-clockshift {v:?}: expected a number of seconds"))?;
+                o.clock_shift = Some(s);
+            }
             "-li" => o.log_in = Some(value("-li")?),
             "-lo" => o.log_out = Some(value("-lo")?),
             "-NIC" => {
@@ -186,6 +202,8 @@ mod tests {
         assert!(o.flush_logs);
         assert!(!o.callback_to_named_address);
         assert!(serve("-callbacknamed").callback_to_named_address);
+        assert_eq!(serve("-clockshift -3600.5").clock_shift, Some(-3600.5));
+        assert!(parse_args(args("-clockshift soon")).is_err());
         assert!(
             matches!(o.sleep, SleepPolicy::EventDriven { max_block, .. } if max_block == Duration::from_millis(5))
         );

@@ -35,6 +35,11 @@ static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::ne
 
 /// Starts vrpn_server on `cfg` text at `port` (0: any) and reads the port from its first line.
 pub fn start_server(cfg: &str, port: u16) -> Server {
+    start_server_with(cfg, port, &[])
+}
+
+/// [`start_server`] with more `vrpn_server` options before the port.
+pub fn start_server_with(cfg: &str, port: u16, options: &[&str]) -> Server {
     let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("vrpn-robust-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -42,6 +47,7 @@ pub fn start_server(cfg: &str, port: u16) -> Server {
     std::fs::write(&path, cfg).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_vrpn_server"))
         .args(["-f", path.to_str().unwrap()])
+        .args(options)
         .arg(port.to_string())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
