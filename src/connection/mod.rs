@@ -574,10 +574,7 @@ impl Connection {
             let mut core = self.inner.core.borrow_mut();
             let Core { session, shell } = &mut *core;
             shell.service(clock, session);
-            if session
-                .poll_timeout()
-                .is_some_and(|t| clock.now().mono >= t)
-            {
+            if shell.deadline_passed(session.poll_timeout(), clock) {
                 session.handle_timeout(clock.now());
             }
             if session.has_io() {

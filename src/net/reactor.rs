@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use mio::event::Source;
 use mio::{Events, Interest, Poll, Token};
 
-use crate::time::Now;
+use crate::time::{Now, TimeSource};
 
 /// Token of the timer that wakes the poll at a deadline.
 const TIMER: Token = Token(0);
@@ -285,6 +285,68 @@ impl Reactor {
     }
 }
 
+/// One owner's deadline, watched by a timer in the reactor's poll set: a loop pass learns that
+/// the deadline has passed from the poll it makes anyway, without reading the clock. (A
+/// session with clock synchronisation always has a deadline; comparing it with the clock on
+/// every pass cost two clock readings per pass.)
+pub(crate) struct DeadlineTimer {
+    timer: Timer,
+    fd: std::os::fd::RawFd,
+    token: Token,
+    reactor: Reactor,
+    /// The deadline the timer is set for.
+    armed: Option<Instant>,
+    /// The armed deadline has passed.
+    passed: bool,
+}
+
+impl DeadlineTimer {
+    /// A timer in `reactor`'s poll set; `None` where the platform has none.
+    pub(crate) fn new(reactor: &Reactor) -> Option<DeadlineTimer> {
+        let timer = Timer::unregistered()?;
+        let fd = timer.fd();
+        let token = reactor
+            .register_quiet(&mut mio::unix::SourceFd(&fd), Interest::READABLE)
+            .ok()?;
+        Some(DeadlineTimer {
+            timer,
+            fd,
+            token,
+            reactor: reactor.clone(),
+            armed: None,
+            passed: false,
+        })
+    }
+
+    /// Whether `deadline` has passed. The clock is read only when the deadline differs from
+    /// the one the timer is set for (to set it); otherwise the poll's readiness answers.
+    pub(crate) fn passed(&mut self, deadline: Instant, clock: &dyn TimeSource) -> bool {
+        if self.armed != Some(deadline) {
+            // A new deadline: readiness left from the old one means nothing.
+            self.reactor.take(self.token);
+            let now = clock.now().mono;
+            self.passed = now >= deadline;
+            self.armed = Some(deadline);
+            if !self.passed && !self.timer.arm(deadline - now) {
+                // No timer after all: compare with the clock every time.
+                self.armed = None;
+            }
+            return self.passed;
+        }
+        if !self.passed && self.reactor.take(self.token).readable {
+            self.timer.clear();
+            self.passed = true;
+        }
+        self.passed
+    }
+}
+
+impl Drop for DeadlineTimer {
+    fn drop(&mut self) {
+        self.reactor.deregister_fd(self.fd, self.token);
+    }
+}
+
 /// A one-shot monotonic timer in the poll set (Linux timerfd).
 #[cfg(any(target_os = "linux", target_os = "android"))]
 struct Timer(nix::sys::timerfd::TimerFd);
@@ -294,6 +356,20 @@ struct Timer;
 
 #[cfg(any(target_os = "linux", target_os = "android"))]
 impl Timer {
+    /// A timer to register with [`Timer::source`].
+    fn unregistered() -> Option<Timer> {
+        use nix::sys::timerfd::{ClockId, TimerFd, TimerFlags};
+        TimerFd::new(ClockId::CLOCK_MONOTONIC, TimerFlags::TFD_NONBLOCK)
+            .ok()
+            .map(Timer)
+    }
+
+    /// The timer's descriptor, to register it.
+    fn fd(&self) -> std::os::fd::RawFd {
+        use std::os::fd::AsRawFd;
+        self.0.as_raw_fd()
+    }
+
     fn new(poll: &Poll) -> Option<Timer> {
         use nix::sys::timerfd::{ClockId, TimerFd, TimerFlags};
         use std::os::fd::AsRawFd;
@@ -329,6 +405,12 @@ impl Timer {
 
 #[cfg(not(any(target_os = "linux", target_os = "android")))]
 impl Timer {
+    fn unregistered() -> Option<Timer> {
+        None
+    }
+    fn fd(&self) -> std::os::fd::RawFd {
+        -1
+    }
     fn new(_: &Poll) -> Option<Timer> {
         None
     }

@@ -9,7 +9,7 @@ use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
 use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Interest, Token};
 
-use super::reactor::{Reactor, Ready};
+use super::reactor::{DeadlineTimer, Reactor, Ready};
 use super::sys::recv_datagrams;
 use crate::error::Error;
 use crate::proto::buffers::INBOX_SLOTS;
@@ -111,6 +111,8 @@ enum Listeners {
 /// Every socket of one connection.
 pub(crate) struct Shell {
     reactor: Option<Reactor>,
+    /// Watches the session's next deadline in the poll (made when first needed).
+    deadline: Option<DeadlineTimer>,
     /// The reactor's epoch when this shell last took its sockets' readiness.
     seen_epoch: u64,
     listeners: Listeners,
@@ -174,6 +176,7 @@ impl Shell {
     pub(crate) fn none() -> Shell {
         Shell {
             reactor: None,
+            deadline: None,
             seen_epoch: 0,
             listeners: Listeners::None,
             peers: Vec::new(),
@@ -203,6 +206,7 @@ impl Shell {
             .map_err(|e| Error::io("registering listeners", e))?;
         Ok(Shell {
             reactor: Some(reactor.clone()),
+            deadline: None,
             seen_epoch: 0,
             listeners: Listeners::Server {
                 tcp,
@@ -245,6 +249,7 @@ impl Shell {
         }
         let shell = Shell {
             reactor: Some(reactor.clone()),
+            deadline: None,
             seen_epoch: 0,
             listeners: Listeners::Client {
                 listener,
@@ -259,6 +264,26 @@ impl Shell {
     /// The reactor the sockets wait in.
     pub(crate) fn reactor(&self) -> Option<&Reactor> {
         self.reactor.as_ref()
+    }
+
+    /// Whether the session's next deadline (`Session::poll_timeout`) has passed. With a
+    /// reactor a timer in the poll answers, so a pass reads the clock only when the deadline
+    /// changes or passes; without one the clock is compared.
+    pub(crate) fn deadline_passed(
+        &mut self,
+        deadline: Option<std::time::Instant>,
+        clock: &dyn TimeSource,
+    ) -> bool {
+        let Some(deadline) = deadline else {
+            return false;
+        };
+        if self.deadline.is_none() {
+            self.deadline = self.reactor.as_ref().and_then(DeadlineTimer::new);
+        }
+        match &mut self.deadline {
+            Some(timer) => timer.passed(deadline, clock),
+            None => clock.now().mono >= deadline,
+        }
     }
 
     /// The server's port (after binding port 0, the one the OS chose).

@@ -76,6 +76,11 @@ impl Session {
             if let Some(t) = p.clock.as_deref().and_then(|c| c.next_deadline()) {
                 at(t);
             }
+            // A clock translation is reused until its limit: a deadline, so that no pass
+            // reads the clock to check it.
+            if let Some((_, until)) = p.clock_pass {
+                at(until);
+            }
         }
         match &self.kind {
             Kind::Client(c) if self.peers.iter().flatten().next().is_none() => {
@@ -98,6 +103,11 @@ impl Session {
     /// and its "no answer" explanation, the server's request summary, the replay clock.
     pub fn handle_timeout(&mut self, now: Now) {
         self.timeouts_changed();
+        for p in self.peers.iter_mut().flatten() {
+            if p.clock_pass.is_some_and(|(_, until)| now.mono >= until) {
+                p.clock_pass = None;
+            }
+        }
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_ref() else {
                 continue;
@@ -207,13 +217,6 @@ impl Session {
                 self.input_pending = true;
             }
             p.budget = 0;
-            // A clock translation is reused until its limit (checked once a pass, not per
-            // message).
-            if let Some((_, until)) = p.clock_pass {
-                if now.now().mono >= until {
-                    p.clock_pass = None;
-                }
-            }
         }
         if let Kind::File(r) = &mut self.kind {
             r.tick(now.now().mono);

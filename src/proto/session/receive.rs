@@ -367,6 +367,8 @@ impl Session {
                             None => {
                                 let (t, until) = c.translation_until(now.now());
                                 p.clock_pass = Some((t, until));
+                                // Its limit is a deadline of the session.
+                                self.timeout_cache.set(None);
                                 t
                             }
                         };
