@@ -46,6 +46,8 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "capi")]
+pub mod capi;
 pub mod connection;
 pub mod devices;
 pub use connection::dispatch;
