@@ -46,7 +46,9 @@
 
 #![warn(missing_docs)]
 
-#[cfg(feature = "capi")]
+// The C ABI; also in the crate's own unit-test build, so `cargo test` covers it without the
+// feature.
+#[cfg(any(feature = "capi", test))]
 pub mod capi;
 pub mod connection;
 pub mod devices;

@@ -177,3 +177,93 @@ pub(crate) unsafe fn write_out<T>(out: *mut T, value: T, what: &str) -> Result<(
     unsafe { out.write(value) };
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use std::cell::Cell;
+    use std::rc::Rc;
+
+    use super::*;
+
+    /// A handle kind that counts its drops.
+    struct Probe {
+        header: Header,
+        drops: Rc<Cell<u32>>,
+    }
+
+    impl Object for Probe {
+        const TAG: u32 = 0x7672_ff01;
+        const NAME: &'static str = "Probe";
+        fn header(&self) -> &Header {
+            &self.header
+        }
+    }
+
+    impl Drop for Probe {
+        fn drop(&mut self) {
+            self.drops.set(self.drops.get() + 1);
+        }
+    }
+
+    fn probe() -> (*mut Probe, Rc<Cell<u32>>) {
+        let drops = Rc::new(Cell::new(0));
+        let d = drops.clone();
+        let p = into_handle(|| {
+            Ok(Probe {
+                header: Header::new::<Probe>(),
+                drops: d,
+            })
+        });
+        assert!(!p.is_null());
+        (p, drops)
+    }
+
+    #[test]
+    fn a_panic_becomes_an_internal_error_with_its_text() {
+        let (p, drops) = probe();
+        let r: Result<(), Failure> = with(p, |_| panic!("deliberate test panic"));
+        let f = r.unwrap_err();
+        assert_eq!(f.status, VrpnStatus::Internal);
+        assert!(f.text.contains("deliberate test panic"), "{}", f.text);
+        // The handle is still usable after the panic, then freed once.
+        assert!(with(p, |_| Ok(())).is_ok());
+        assert_eq!(free(p), VrpnStatus::Ok);
+        assert_eq!(drops.get(), 1);
+    }
+
+    #[test]
+    fn a_handle_freed_inside_a_call_is_dropped_when_the_call_returns() {
+        let (p, drops) = probe();
+        let r = with(p, |_| {
+            assert_eq!(free(p), VrpnStatus::Ok);
+            // Still alive: the outer call holds a reference.
+            assert_eq!(drops.get(), 0);
+            // Calls into a handle being freed are refused.
+            let again = with(p, |_| Ok(()));
+            assert_eq!(again.unwrap_err().status, VrpnStatus::InvalidHandle);
+            Ok(7)
+        });
+        assert_eq!(r.unwrap(), 7);
+        assert_eq!(drops.get(), 1);
+    }
+
+    #[test]
+    fn null_and_foreign_thread_handles_are_refused() {
+        let r = with(std::ptr::null::<Probe>(), |_| Ok(()));
+        assert_eq!(r.unwrap_err().status, VrpnStatus::NullArgument);
+        let (p, drops) = probe();
+        let addr = p as usize;
+        let (status, freed) = std::thread::spawn(move || {
+            let p = addr as *mut Probe;
+            let s = with(p, |_| Ok(())).unwrap_err().status;
+            (s, free(p))
+        })
+        .join()
+        .unwrap();
+        assert_eq!(status, VrpnStatus::WrongThread);
+        assert_eq!(freed, VrpnStatus::WrongThread);
+        assert_eq!(drops.get(), 0);
+        assert_eq!(free(p), VrpnStatus::Ok);
+        assert_eq!(drops.get(), 1);
+    }
+}
