@@ -261,6 +261,8 @@ fn c_tracker_client_reads_static_c_server() {
     let mut child = Command::new(&server_exe)
         .args(["0", "20"])
         .stdout(std::process::Stdio::piped())
+        // Its notice when the client leaves is expected.
+        .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
     let mut first = String::new();
@@ -292,4 +294,50 @@ fn c_tracker_client_reads_static_c_server() {
         assert!(p.pos[2] > last_z[s], "{text}");
         last_z[s] = p.pos[2];
     }
+}
+
+#[test]
+fn c_steady_state_allocates_nothing() {
+    let scratch = Scratch::new("alloc");
+    let exe = scratch.0.join("steady_alloc");
+    // Static: the interposed malloc then also serves the library's own code in the program.
+    compile("tests/c/steady_alloc.c", &exe, Link::Static);
+    let out = run(&exe, &["1.5", "2.0"]);
+    assert!(out.contains(", 0 in "), "{out}");
+}
+
+#[test]
+fn header_is_valid_cpp() {
+    let scratch = Scratch::new("cpp");
+    let (src, exe) = (scratch.0.join("use.cpp"), scratch.0.join("use"));
+    std::fs::write(
+        &src,
+        "#include \"vrpn.h\"\n\
+         #include <memory>\n\
+         struct TrackerFree { void operator()(VrpnTracker *t) const { vrpn_tracker_free(t); } };\n\
+         int main() {\n\
+           std::unique_ptr<VrpnTracker, TrackerFree> t(vrpn_tracker_open(\"T0@\"));\n\
+           VrpnStatus s = vrpn_last_error_status();\n\
+           return (!t && s == VRPN_STATUS_NAME && vrpn_abi_version() == VRPN_ABI_VERSION) ? 0 : 1;\n\
+         }\n",
+    )
+    .unwrap();
+    let lib = library();
+    let o = Command::new(std::env::var("CXX").unwrap_or_else(|_| "c++".into()))
+        .current_dir(ROOT)
+        .args(["-std=c++11", "-Wall", "-Wextra", "-Werror", "-Iinclude"])
+        .arg(&src)
+        .arg("-o")
+        .arg(&exe)
+        .arg(format!("-L{}", lib.dir.display()))
+        .arg("-lvrpn")
+        .arg(format!("-Wl,-rpath,{}", lib.dir.display()))
+        .output()
+        .expect("cannot run c++");
+    assert!(
+        o.status.success(),
+        "c++ failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    run(&exe, &[]);
 }
