@@ -3,7 +3,7 @@
 //! `vrpn_server` child and to each other over 127.0.0.1.
 //!
 //! The library is built by a nested `cargo rustc --features capi --crate-type cdylib,staticlib`
-//! into its own target directory (`<target>/capi`), so this test runs in a plain
+//! (dev profile) into its own target directory (`<target>/capi`), so this test runs in a plain
 //! `cargo test --release` without the feature and without fighting the outer build's lock.
 
 mod common;
@@ -67,7 +67,8 @@ fn build_library() -> Library {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(ROOT)
-        .args(["rustc", "--release", "--lib", "--no-default-features"])
+        // The dev profile: half the build time of --release, and overflow checks on.
+        .args(["rustc", "--lib", "--no-default-features"])
         .args(["--features", "capi", "--crate-type", "cdylib,staticlib"])
         .arg("--target-dir")
         .arg(&target)
@@ -81,7 +82,7 @@ fn build_library() -> Library {
         out.status.success(),
         "building the C library failed:\n{stderr}"
     );
-    let dir = target.join("release");
+    let dir = target.join("debug");
     assert!(dir.join("libvrpn.so").is_file() && dir.join("libvrpn.a").is_file());
     // "note: native-static-libs: -lgcc_s -lutil …" (replayed by cargo when fresh).
     let native_libs = stderr
