@@ -155,7 +155,8 @@ thread_local! {
 /// Records `f` as this thread's last error and returns its status.
 pub(crate) fn record(f: Failure) -> VrpnStatus {
     let text = CString::new(f.text.replace('\0', "\\0")).unwrap_or_default();
-    LAST_ERROR.with(|l| {
+    // `try_with`: a call made while the thread is being torn down must not panic here.
+    let _ = LAST_ERROR.try_with(|l| {
         *l.borrow_mut() = LastError {
             status: f.status,
             text,
@@ -200,13 +201,17 @@ pub(crate) unsafe fn text_arg<'a>(p: *const c_char, what: &str) -> Result<&'a st
 /// it. Calls that succeed leave it unchanged.
 #[no_mangle]
 pub extern "C" fn vrpn_last_error() -> *const c_char {
-    LAST_ERROR.with(|l| l.borrow().text.as_ptr())
+    LAST_ERROR
+        .try_with(|l| l.borrow().text.as_ptr())
+        .unwrap_or(c"".as_ptr())
 }
 
 /// Status of the most recent failed call on the calling thread (`VRPN_STATUS_OK` if none).
 #[no_mangle]
 pub extern "C" fn vrpn_last_error_status() -> VrpnStatus {
-    LAST_ERROR.with(|l| l.borrow().status)
+    LAST_ERROR
+        .try_with(|l| l.borrow().status)
+        .unwrap_or(VrpnStatus::Ok)
 }
 
 /// The library's version, e.g. "0.1.0" (a static string).
