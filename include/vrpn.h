@@ -379,6 +379,12 @@ const char *vrpn_last_error(void);
 VrpnStatus vrpn_last_error_status(void);
 
 /**
+ * The name of a status code without its prefix ("OK", "NO_DATA", "WRONG_THREAD", …), or
+ * "UNKNOWN" for a value that is not one; a static string, for logs.
+ */
+const char *vrpn_status_name(int32_t status);
+
+/**
  * The library's version, e.g. "0.1.0" (a static string).
  */
 const char *vrpn_version(void);
@@ -438,7 +444,7 @@ VrpnStatus vrpn_tracker_on_velocity(VrpnTracker *tracker, VrpnTrackerVelocityCal
 VrpnStatus vrpn_tracker_on_acceleration(VrpnTracker *tracker, VrpnTrackerAccelerationCallback callback, void *userdata, uint64_t *id_out);
 
 /**
- * Removes a callback by the id an `vrpn_tracker_on_*` call gave.
+ * Removes a callback by the id a `vrpn_tracker_on_*` call gave.
  */
 VrpnStatus vrpn_tracker_remove_callback(VrpnTracker *tracker, uint64_t id);
 

@@ -201,7 +201,7 @@ pub extern "C" fn vrpn_tracker_on_acceleration(
     }))
 }
 
-/// Removes a callback by the id an `vrpn_tracker_on_*` call gave.
+/// Removes a callback by the id a `vrpn_tracker_on_*` call gave.
 #[no_mangle]
 pub extern "C" fn vrpn_tracker_remove_callback(tracker: *mut VrpnTracker, id: u64) -> VrpnStatus {
     status(handle::with(tracker, |t| {

@@ -214,6 +214,30 @@ pub extern "C" fn vrpn_last_error_status() -> VrpnStatus {
         .unwrap_or(VrpnStatus::Ok)
 }
 
+/// The name of a status code without its prefix ("OK", "NO_DATA", "WRONG_THREAD", …), or
+/// "UNKNOWN" for a value that is not one; a static string, for logs.
+#[no_mangle]
+pub extern "C" fn vrpn_status_name(status: i32) -> *const c_char {
+    let name: &'static CStr = match status {
+        0 => c"OK",
+        1 => c"NO_DATA",
+        -1 => c"NULL_ARGUMENT",
+        -2 => c"INVALID_ARGUMENT",
+        -3 => c"INVALID_HANDLE",
+        -4 => c"WRONG_THREAD",
+        -5 => c"NAME",
+        -6 => c"RESOLVE",
+        -7 => c"IO",
+        -8 => c"LIMIT",
+        -9 => c"UNSUPPORTED",
+        -10 => c"LOG",
+        -11 => c"BUSY",
+        -12 => c"INTERNAL",
+        _ => c"UNKNOWN",
+    };
+    name.as_ptr()
+}
+
 /// The library's version, e.g. "0.1.0" (a static string).
 #[no_mangle]
 pub extern "C" fn vrpn_version() -> *const c_char {
@@ -243,4 +267,61 @@ pub extern "C" fn vrpn_set_default_printer(mode: i32) -> VrpnStatus {
     };
     set_text_printer(printer);
     VrpnStatus::Ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_status_has_a_distinct_name_matching_its_variant() {
+        use VrpnStatus::*;
+        let all = [
+            Ok,
+            NoData,
+            NullArgument,
+            InvalidArgument,
+            InvalidHandle,
+            WrongThread,
+            Name,
+            Resolve,
+            Io,
+            Limit,
+            Unsupported,
+            Log,
+            Busy,
+            Internal,
+        ];
+        let mut names = std::collections::HashSet::new();
+        for s in all {
+            // SAFETY: vrpn_status_name returns a static NUL-terminated string.
+            let name = unsafe { CStr::from_ptr(vrpn_status_name(s as i32)) };
+            let name = name.to_str().unwrap();
+            let variant = format!("{s:?}");
+            assert_eq!(name.replace('_', ""), variant.to_uppercase(), "{variant}");
+            assert!(names.insert(name));
+        }
+        // SAFETY: as above.
+        let unknown = unsafe { CStr::from_ptr(vrpn_status_name(99)) };
+        assert_eq!(unknown.to_str().unwrap(), "UNKNOWN");
+    }
+
+    #[test]
+    fn a_failure_is_this_threads_last_error() {
+        let s = record(Failure::invalid("first problem"));
+        assert_eq!(s, VrpnStatus::InvalidArgument);
+        // SAFETY: vrpn_last_error returns a NUL-terminated string valid until the next failure.
+        let text = unsafe { CStr::from_ptr(vrpn_last_error()) }.to_owned();
+        assert_eq!(text.to_str().unwrap(), "first problem");
+        assert_eq!(vrpn_last_error_status(), VrpnStatus::InvalidArgument);
+        let other = std::thread::spawn(|| {
+            // SAFETY: as above.
+            let t = unsafe { CStr::from_ptr(vrpn_last_error()) }.to_owned();
+            (t, vrpn_last_error_status())
+        })
+        .join()
+        .unwrap();
+        assert_eq!(other.0.to_str().unwrap(), "");
+        assert_eq!(other.1, VrpnStatus::Ok);
+    }
 }

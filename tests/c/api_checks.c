@@ -120,6 +120,9 @@ int main(void)
     CHECK(vrpn_abi_version() == VRPN_ABI_VERSION);
     CHECK(strcmp(vrpn_last_error(), "") == 0);
     CHECK(vrpn_last_error_status() == VRPN_STATUS_OK);
+    CHECK(strcmp(vrpn_status_name(VRPN_STATUS_WRONG_THREAD), "WRONG_THREAD") == 0);
+    CHECK(strcmp(vrpn_status_name(VRPN_STATUS_NO_DATA), "NO_DATA") == 0);
+    CHECK(strcmp(vrpn_status_name(12345), "UNKNOWN") == 0);
 
     /* Errors: codes and texts. */
     CHECK(vrpn_tracker_open(NULL) == NULL);
