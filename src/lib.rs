@@ -46,6 +46,10 @@
 
 #![warn(missing_docs)]
 
+// The C ABI; also in the crate's own unit-test build, so `cargo test` covers it without the
+// feature.
+#[cfg(any(feature = "capi", test))]
+pub mod capi;
 pub mod connection;
 pub mod devices;
 pub use connection::dispatch;
