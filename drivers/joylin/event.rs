@@ -11,7 +11,8 @@
 //! A joystick device hands over whole events; a stand-in (a pipe, a pseudo-terminal) may
 //! split them, and a damaged stream has no sync marker. The [`Framer`] collects eight bytes,
 //! and when they are not a plausible event (an unknown type, a button value other than 0 or
-//! 1) gives up one byte and tries again from the next.
+//! 1, a number the caller knows the device does not have) gives up one byte and tries again
+//! from the next. Damage can still pass for an event now and then: there is no checksum.
 
 use crate::time::Now;
 
@@ -106,15 +107,20 @@ impl Framer {
     }
 
     /// Takes one byte that arrived at `arrived`; returns an event (with the arrival of its
-    /// first byte) when this byte completes one.
-    pub fn push(&mut self, b: u8, arrived: Now) -> Option<(JsEvent, Now)> {
+    /// first byte) when this byte completes one that is plausible and that `accept` takes.
+    pub fn push(
+        &mut self,
+        b: u8,
+        arrived: Now,
+        accept: impl Fn(&JsEvent) -> bool,
+    ) -> Option<(JsEvent, Now)> {
         self.buf[self.len] = b;
         self.times[self.len] = Some(arrived);
         self.len += 1;
         if self.len < EVENT_LEN {
             return None;
         }
-        if let Some(ev) = JsEvent::decode(&self.buf) {
+        if let Some(ev) = JsEvent::decode(&self.buf).filter(|e| accept(e)) {
             self.len = 0;
             return Some((ev, self.times[0].unwrap_or(arrived)));
         }
@@ -175,7 +181,7 @@ mod tests {
             .chain(&a.encode())
             .chain(&b.encode())
         {
-            got.extend(f.push(x, now).map(|(e, _)| e));
+            got.extend(f.push(x, now, |_| true).map(|(e, _)| e));
         }
         assert_eq!(got, vec![a, b]);
         assert_eq!(f.total_skipped(), 3);

@@ -25,8 +25,11 @@
 //! learns the counts from the events instead: it starts at C++'s 2 and 2 and grows to cover
 //! the highest axis and button number seen. A joystick device reports every axis and button
 //! in its initial-state events right after it opens, so the counts are complete before the
-//! first live event and match the ioctls' (for a stick with at least two of each). Numbers
-//! beyond the protocol's limits (128 channels, 256 buttons) are ignored with one warning.
+//! first live event and match the ioctls' (for a stick with at least two of each). Once the
+//! initial state has been seen, a live event beyond the counts is taken for damage in the
+//! stream; without one (a stand-in that sends only live events) the counts grow with the
+//! events. Numbers beyond the protocol's limits (128 channels, 256 buttons) are ignored with
+//! one warning.
 //!
 //! # Differences from C++ VRPN
 //!
@@ -74,6 +77,9 @@ pub struct JoylinDriver {
     framer: Framer,
     /// Initial-state events applied but not reported yet.
     init_pending: bool,
+    /// The device reported its initial state: the counts are known, and a live event beyond
+    /// them is damage.
+    counts_known: bool,
     events: u64,
     ignored: u64,
 }
@@ -88,6 +94,7 @@ impl JoylinDriver {
             buttons: ButtonServer::new(&cfg.name, conn, DEFAULT_BUTTONS)?,
             framer: Framer::new(),
             init_pending: false,
+            counts_known: false,
             events: 0,
             ignored: 0,
         })
@@ -194,9 +201,21 @@ impl SerialDriver for JoylinDriver {
     fn received(&mut self, bytes: &[u8], arrived: Now, _port: &mut PortOps) {
         let mut init_at = arrived;
         for &b in bytes {
-            let Some((ev, at)) = self.framer.push(b, arrived) else {
+            let (axes, buttons) = (self.analog.num_channels(), self.buttons.num_buttons());
+            let known = self.counts_known;
+            let plausible = |e: &JsEvent| {
+                let n = usize::from(e.number);
+                e.init
+                    || !known
+                    || match e.kind {
+                        Kind::Axis => n < axes,
+                        Kind::Button => n < buttons,
+                    }
+            };
+            let Some((ev, at)) = self.framer.push(b, arrived, plausible) else {
                 continue;
             };
+            self.counts_known |= ev.init;
             if !self.apply(&ev) {
                 continue;
             }

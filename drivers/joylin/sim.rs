@@ -109,6 +109,22 @@ impl JoystickSim {
         &self.buttons
     }
 
+    /// Sets axis `i` (the next initial state carries it; nothing is sent now).
+    pub fn set_axis(&mut self, i: usize, v: i16) {
+        self.axes[i] = v;
+    }
+
+    /// Sets button `i` (the next initial state carries it; nothing is sent now).
+    pub fn set_button(&mut self, i: usize, pressed: bool) {
+        self.buttons[i] = pressed;
+    }
+
+    /// Leaves out the initial state after the next plug (a stand-in stream that sends live
+    /// events only).
+    pub fn skip_initial_state(&mut self) {
+        self.init_pending = false;
+    }
+
     /// The device was opened again: the initial state goes out at the next transmit.
     pub fn plugged(&mut self) {
         self.init_pending = true;
