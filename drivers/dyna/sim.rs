@@ -54,6 +54,9 @@ pub struct SimConfig {
     pub status_reply: StatusReply,
     /// Log every record sent.
     pub keep_log: bool,
+    /// Keeps streaming through the stop command (as a device at another baud rate would
+    /// seem to).
+    pub ignores_stop: bool,
 }
 
 impl SimConfig {
@@ -67,6 +70,7 @@ impl SimConfig {
             streaming_at_start: true,
             status_reply: StatusReply::Record,
             keep_log: false,
+            ignores_stop: false,
         }
     }
 
@@ -248,12 +252,12 @@ impl DeviceModel for DynaSim {
         self.heard.extend_from_slice(bytes);
         for &b in bytes {
             match b {
-                0x03 | b'4' => {
+                0x03 | b'4' if !self.cfg.ignores_stop => {
                     self.mode = Mode::Stopped;
                     self.next_record = None;
                 }
                 STATUS_REQUEST => self.pending_status = Some(now.mono + self.cfg.reply_delay),
-                b'0' | b'V' => {
+                b'0' | b'V' if self.mode == Mode::Stopped => {
                     self.mode = Mode::Continuous;
                     self.next_record = Some(now.mono + self.cfg.reply_delay);
                 }

@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::reset::{CONTINUOUS, QUIET, STATUS_LIMIT, STATUS_REQUEST, STOP};
+use super::reset::{CONTINUOUS, QUIET, STATUS_LIMIT, STATUS_REQUEST, STOP, STOP_LIMIT};
 use super::sim::{DynaSim, SentRecord, SimConfig, StatusReply};
 use super::{DynaDriver, RETRY_DELAY, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
@@ -287,6 +287,22 @@ fn a_device_left_stopped_starts_the_same_way() {
     let mut r = rig(LINE, |s| s.streaming_at_start = false, 9);
     let startup = r.run_to_first_pose(Duration::from_secs(5));
     assert!(startup < QUIET + Duration::from_millis(40), "{startup:?}");
+}
+
+#[test]
+fn a_stream_that_never_stops_is_reported_and_read_anyway() {
+    let mut r = rig(LINE, |s| s.ignores_stop = true, 11);
+    let startup = r.run_to_first_pose(Duration::from_secs(5));
+    // The status request goes out after the longest wait; the stream's next record passes
+    // for the answer.
+    assert!(
+        startup > STOP_LIMIT && startup < STOP_LIMIT + Duration::from_millis(60),
+        "{startup:?}"
+    );
+    assert_eq!(r.texts_with("kept sending after the stop command"), 1);
+    r.forget();
+    r.line.run_for(Duration::from_millis(500));
+    r.assert_all_arrived();
 }
 
 #[test]
