@@ -130,7 +130,10 @@ fn dynasight_streams_without_allocating() {
     let poses = poses.get() - before;
     assert!(poses >= 295, "{poses} poses");
     assert!(line.driver.0.skipped_bytes() >= 20);
-    assert_eq!(allocations, 0, "allocations while streaming {poses} records");
+    assert_eq!(
+        allocations, 0,
+        "allocations while streaming {poses} records"
+    );
 }
 
 #[test]
@@ -170,5 +173,8 @@ fn joystick_streams_without_allocating() {
     // 200 events a second for 5 s, each reported.
     assert!(reports >= 990, "{reports} reports");
     assert!(line.driver.0.skipped_bytes() > 0);
-    assert_eq!(allocations, 0, "allocations while streaming {reports} reports");
+    assert_eq!(
+        allocations, 0,
+        "allocations while streaming {reports} reports"
+    );
 }
