@@ -1,7 +1,8 @@
 //! The DynaSight and joystick drivers end to end: a simulator on a pseudo-terminal, a
 //! `vrpn_server` child running the driver from its vrpn.cfg line, and a client over a real
-//! socket on 127.0.0.1. Values are checked against the simulator's own log; damage, silence
-//! and an unplugged device are survived.
+//! socket on 127.0.0.1. Values are checked against the simulator's own log (over TCP only,
+//! so no datagram can be lost on a busy machine); damage, silence and an unplugged device are
+//! survived.
 
 mod common;
 
@@ -104,7 +105,7 @@ fn dynasight_through_vrpn_server_to_a_client() {
         &format!("vrpn_Tracker_Dyna Dyna0 1 {} 19200\n", sim.path.display()),
         0,
     );
-    let at = format!("Dyna0@127.0.0.1:{}", server.port);
+    let at = format!("Dyna0@tcp://127.0.0.1:{}", server.port);
     let tracker = TrackerRemote::new(&at).unwrap();
     let (_texts_rx, texts) = texts(&at);
     let poses: Rc<RefCell<Vec<TrackerPose>>> = Rc::default();
@@ -159,7 +160,7 @@ fn dynasight_through_vrpn_server_to_a_client() {
         for (p, s) in got.iter().zip(&sent[i..]) {
             let left = t0.wall.plus(s.first_byte - t0.mono);
             let lag = p.time.seconds_since(left);
-            assert!((-0.001..0.05).contains(&lag), "lag {lag}");
+            assert!((-0.001..0.25).contains(&lag), "lag {lag}");
             assert_eq!(p.sensor, 0);
             let q = p.quat.into_inner();
             assert_eq!([q.i, q.j, q.k, q.w], [0.0, 0.0, 0.0, 1.0]);
@@ -253,10 +254,10 @@ fn joystick_through_vrpn_server_to_a_client_and_analogfly() {
         ),
         0,
     );
-    let at = format!("Joy0@127.0.0.1:{}", server.port);
+    let at = format!("Joy0@tcp://127.0.0.1:{}", server.port);
     let analog = AnalogRemote::new(&at).unwrap();
     let buttons = ButtonRemote::new(&at).unwrap();
-    let flyer = TrackerRemote::new(&format!("Flyer0@127.0.0.1:{}", server.port)).unwrap();
+    let flyer = TrackerRemote::new(&format!("Flyer0@tcp://127.0.0.1:{}", server.port)).unwrap();
     let (_texts_rx, texts) = texts(&at);
     type Channels = (TimeVal, Vec<f64>);
     let reports: Rc<RefCell<Vec<Channels>>> = Rc::default();
