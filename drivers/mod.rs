@@ -4,5 +4,8 @@
 //! [`SerialDriver`]: crate::serial::SerialDriver
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
 
+pub mod dyna;
 pub mod fastrak;
 pub mod flock;
+pub mod joylin;
+mod notes;

@@ -344,6 +344,12 @@ impl ButtonServer {
         self.state.borrow().num
     }
 
+    /// Sets the number of buttons (clamped to 256), for a device that learns its count as it
+    /// runs (the Linux joystick). Buttons added start released.
+    pub fn set_num_buttons(&self, n: usize) {
+        self.state.borrow_mut().num = n.min(MAX_BUTTONS);
+    }
+
     /// Sets the physical state of button `i` (nonzero is pressed). Out-of-range is ignored.
     pub fn set_button(&self, i: usize, pressed: bool) {
         let mut s = self.state.borrow_mut();

@@ -135,9 +135,12 @@ impl Port {
             }
             PortKind::InputDevice => {
                 use std::os::unix::fs::OpenOptionsExt;
+                // O_NOCTTY: a terminal standing in for the device (a pseudo-terminal in
+                // tests) must not become the server's controlling terminal, whose hang-up
+                // would kill it.
                 let file = std::fs::OpenOptions::new()
                     .read(true)
-                    .custom_flags(nix::libc::O_NONBLOCK)
+                    .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY)
                     .open(path)?;
                 Ok(Port::Input(file))
             }

@@ -8,8 +8,10 @@ use crate::devices::dial::DialExample;
 use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
+use crate::drivers::dyna::DynaDriver;
 use crate::drivers::fastrak::FastrakDriver;
 use crate::drivers::flock::{FlockDriver, FlockParallelPort};
+use crate::drivers::joylin::JoylinDriver;
 use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
 use crate::serial::SerialDevice;
 
@@ -76,6 +78,14 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Vec<Box<dyn Serve
         DeviceConfig::Flock(c) => {
             let driver = FlockDriver::new(c, conn).map_err(at)?;
             Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::Dyna(c) => {
+            let driver = DynaDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::Joylin(c) => {
+            let driver = JoylinDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.device, driver, conn))])
         }
         DeviceConfig::FlockParallel(c) => {
             let ports = FlockParallelPort::new_group(c, conn).map_err(at)?;

@@ -1,0 +1,180 @@
+//! The DynaSight and joystick drivers report without allocating: checked with a counting
+//! global allocator around every driver call while the simulators stream through them, with
+//! reads split at random points and damage on the line.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use vrpn::drivers::dyna::sim::{DynaSim, SimConfig};
+use vrpn::drivers::dyna::DynaDriver;
+use vrpn::drivers::joylin::sim::{JoystickSim, SimConfig as JoySimConfig};
+use vrpn::drivers::joylin::JoylinDriver;
+use vrpn::serial::testing::VirtualLine;
+use vrpn::serial::{PortKind, PortOps, SerialDriver};
+use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::{AnalogRemote, ButtonRemote, Connection, Now, TimeVal, TrackerRemote};
+
+struct Counting;
+
+thread_local! {
+    static ENABLED: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<u64> = const { Cell::new(0) };
+}
+
+fn note_alloc() {
+    if ENABLED.try_with(Cell::get).unwrap_or(false) {
+        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc(layout)
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_alloc();
+        System.alloc_zeroed(layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_alloc();
+        System.realloc(ptr, layout, new_size)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn counted<T>(f: impl FnOnce() -> T) -> T {
+    ENABLED.with(|e| e.set(true));
+    let out = f();
+    ENABLED.with(|e| e.set(false));
+    out
+}
+
+/// Counts allocations made inside the wrapped driver's calls only (the simulator and the
+/// virtual line allocate freely).
+struct Counted<D>(D);
+
+impl<D: SerialDriver> SerialDriver for Counted<D> {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn port_kind(&self) -> PortKind {
+        self.0.port_kind()
+    }
+    fn opened(&mut self, now: Now, port: &mut PortOps) {
+        self.0.opened(now, port)
+    }
+    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
+        counted(|| self.0.received(bytes, arrived, port))
+    }
+    fn poll(&mut self, now: Now, port: &mut PortOps) {
+        counted(|| self.0.poll(now, port))
+    }
+    fn next_deadline(&self) -> Option<Instant> {
+        counted(|| self.0.next_deadline())
+    }
+    fn closed(&mut self, now: Now) {
+        self.0.closed(now)
+    }
+}
+
+fn start() -> Now {
+    Now {
+        mono: Instant::now(),
+        wall: TimeVal::new(1_700_000_000, 0),
+    }
+}
+
+#[test]
+fn dynasight_streams_without_allocating() {
+    let text = "vrpn_Tracker_Dyna Dyna0 1 /dev/ttyS0 19200\n";
+    let DeviceConfig::Dyna(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
+        panic!("not a Dyna entry");
+    };
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let conn = Connection::new_loopback();
+    let driver = DynaDriver::new(&cfg, &conn).unwrap();
+    let tracker = TrackerRemote::on_connection("Dyna0", &conn).unwrap();
+    let poses = Rc::new(Cell::new(0u64));
+    let p = poses.clone();
+    tracker.on_pose(move |_| p.set(p.get() + 1));
+    let mut line = VirtualLine::new(
+        Counted(driver),
+        DynaSim::new(SimConfig::new(cfg.baud)),
+        start(),
+        3,
+    );
+    line.split_reads = true;
+    // Reset, then streaming with one resynchronisation note to warm every path up.
+    line.run_for(Duration::from_millis(500));
+    assert!(line.driver.0.is_streaming());
+    let noise = [0x01, 0x85, 0x02, 0x7F];
+    let now = line.now().mono;
+    line.device.inject(&noise, now);
+    line.run_for(Duration::from_millis(1500));
+    COUNT.with(|c| c.set(0));
+    let before = poses.get();
+    for _ in 0..5 {
+        line.run_for(Duration::from_secs(1));
+        let now = line.now().mono;
+        line.device.inject(&noise, now);
+    }
+    let allocations = COUNT.with(Cell::get);
+    let poses = poses.get() - before;
+    assert!(poses >= 295, "{poses} poses");
+    assert!(line.driver.0.skipped_bytes() >= 20);
+    assert_eq!(
+        allocations, 0,
+        "allocations while streaming {poses} records"
+    );
+}
+
+#[test]
+fn joystick_streams_without_allocating() {
+    let text = "vrpn_Joylin Joy0 /dev/input/js0\n";
+    let DeviceConfig::Joylin(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
+        panic!("not a Joylin entry");
+    };
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let conn = Connection::new_loopback();
+    let driver = JoylinDriver::new(&cfg, &conn).unwrap();
+    let analog = AnalogRemote::on_connection("Joy0", &conn).unwrap();
+    let buttons = ButtonRemote::on_connection("Joy0", &conn).unwrap();
+    let reports = Rc::new(Cell::new(0u64));
+    let (a, b) = (reports.clone(), reports.clone());
+    analog.on_report(move |_| a.set(a.get() + 1));
+    buttons.on_change(move |_| b.set(b.get() + 1));
+    let mut line = VirtualLine::new(
+        Counted(driver),
+        JoystickSim::new(JoySimConfig::new(6, 12)),
+        start(),
+        4,
+    );
+    line.split_reads = true;
+    // Initial state, live events, one damaged stretch to warm every path up.
+    line.run_for(Duration::from_millis(500));
+    line.inject(&[0x10, 0x20, 0x30]);
+    line.run_for(Duration::from_millis(500));
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..5 {
+        line.run_for(Duration::from_secs(1));
+        line.inject(&[0x10, 0x20, 0x30]);
+    }
+    let allocations = COUNT.with(Cell::get);
+    let reports = reports.get() - before;
+    // 200 events a second for 5 s, each reported.
+    assert!(reports >= 990, "{reports} reports");
+    assert!(line.driver.0.skipped_bytes() > 0);
+    assert_eq!(
+        allocations, 0,
+        "allocations while streaming {reports} reports"
+    );
+}
