@@ -6,3 +6,5 @@
 
 pub mod fastrak;
 pub mod flock;
+pub mod magellan;
+mod stack_text;

@@ -10,6 +10,7 @@ use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
 use crate::drivers::fastrak::FastrakDriver;
 use crate::drivers::flock::{FlockDriver, FlockParallelPort};
+use crate::drivers::magellan::MagellanDriver;
 use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
 use crate::serial::SerialDevice;
 
@@ -75,6 +76,10 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Vec<Box<dyn Serve
         }
         DeviceConfig::Flock(c) => {
             let driver = FlockDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::Magellan(c) => {
+            let driver = MagellanDriver::new(c, conn).map_err(at)?;
             Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
         }
         DeviceConfig::FlockParallel(c) => {
