@@ -4,6 +4,7 @@
 //! [`SerialDriver`]: crate::serial::SerialDriver
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
 
+pub mod cerealbox;
 pub mod fastrak;
 pub mod flock;
 pub mod magellan;

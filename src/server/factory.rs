@@ -8,6 +8,7 @@ use crate::devices::dial::DialExample;
 use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
+use crate::drivers::cerealbox::CerealBoxDriver;
 use crate::drivers::fastrak::FastrakDriver;
 use crate::drivers::flock::{FlockDriver, FlockParallelPort};
 use crate::drivers::magellan::MagellanDriver;
@@ -76,6 +77,10 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Vec<Box<dyn Serve
         }
         DeviceConfig::Flock(c) => {
             let driver = FlockDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::CerealBox(c) => {
+            let driver = CerealBoxDriver::new(c, conn).map_err(at)?;
             Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
         }
         DeviceConfig::Magellan(c) => {
