@@ -100,6 +100,10 @@ pub struct CerealSim {
     requests: u64,
     /// Every record sent (the last [`LOG_CAP`]).
     pub log: VecDeque<SentRecord>,
+    /// When the first byte from the host arrived (the port was opened and reset).
+    pub first_byte_at: Option<Instant>,
+    /// When the first record request arrived (the reset was over).
+    pub first_request_at: Option<Instant>,
 }
 
 impl CerealSim {
@@ -117,6 +121,8 @@ impl CerealSim {
             banners: 0,
             requests: 0,
             log: VecDeque::new(),
+            first_byte_at: None,
+            first_request_at: None,
         }
     }
 
@@ -175,6 +181,7 @@ impl CerealSim {
 
     fn record(&mut self, now: Now) {
         self.requests += 1;
+        self.first_request_at.get_or_insert(now.mono);
         if self.ignore > 0 {
             self.ignore -= 1;
             return;
@@ -202,6 +209,7 @@ impl DeviceModel for CerealSim {
         if self.silent {
             return;
         }
+        self.first_byte_at.get_or_insert(now.mono);
         for &b in bytes {
             self.rx = match (self.rx, b) {
                 (Rx::Config(n), b) => {

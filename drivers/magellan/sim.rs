@@ -121,6 +121,10 @@ pub struct MagellanSim {
     lost_chars: u64,
     /// Every command received, without its CR, in order.
     pub commands: Vec<Vec<u8>>,
+    /// When the first byte from the host arrived (the port was opened and reset).
+    pub first_byte_at: Option<Instant>,
+    /// When the last command was complete.
+    pub last_command_at: Option<Instant>,
     /// Every streamed record (the last [`LOG_CAP`]).
     pub log: VecDeque<SentRecord>,
 }
@@ -143,6 +147,8 @@ impl MagellanSim {
             seq: 0,
             lost_chars: 0,
             commands: Vec::new(),
+            first_byte_at: None,
+            last_command_at: None,
             log: VecDeque::new(),
         }
     }
@@ -220,6 +226,7 @@ impl MagellanSim {
             _ => {}
         }
         self.commands.push(cmd);
+        self.last_command_at = Some(now.mono);
     }
 
     fn stream(&mut self, now: Now, out: &mut Vec<u8>) {
@@ -272,6 +279,7 @@ impl DeviceModel for MagellanSim {
         if self.silent {
             return;
         }
+        self.first_byte_at.get_or_insert(now.mono);
         for &b in bytes {
             if let (Some(gap), Some(last)) = (self.cfg.min_byte_gap, self.last_rx) {
                 if now.mono < last + gap {

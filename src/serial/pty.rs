@@ -13,7 +13,7 @@ use std::os::fd::{AsRawFd, RawFd};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use nix::fcntl::{fcntl, FcntlArg, OFlag};
+use nix::fcntl::{fcntl, FcntlArg, FdFlag, OFlag};
 use serialport::{SerialPort, TTYPort};
 
 use super::testing::DeviceModel;
@@ -38,6 +38,11 @@ fn open_pty() -> io::Result<Pty> {
         .name()
         .map(PathBuf::from)
         .ok_or_else(|| io::Error::other("the pseudo-terminal has no name"))?;
+    // Close-on-exec, so a child process started meanwhile (a server under test) does not
+    // keep the master open: unplugging must hang up the driver's end.
+    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
+        fcntl(fd, FcntlArg::F_SETFD(FdFlag::FD_CLOEXEC)).map_err(errno)?;
+    }
     let fd = master.as_raw_fd();
     let flags = fcntl(fd, FcntlArg::F_GETFL).map_err(errno)?;
     fcntl(
