@@ -431,3 +431,24 @@ fn every_variant_parses_and_builds() {
         assert_eq!(opened, ["Magellan0"]);
     }
 }
+
+#[test]
+fn toggle_requests_do_not_filter_the_reports() {
+    let mut r = rig(
+        "vrpn_Magellan M /dev/ttyS0 9600\n",
+        SimConfig::default(),
+        11,
+    );
+    // A client asks for toggles; as in C++, the Magellan still reports every press and
+    // release.
+    r._remotes.1.set_all_toggle(false).unwrap();
+    r.run_to_streaming(Duration::from_secs(1));
+    r.line.run_for(Duration::from_secs(1));
+    assert_eq!(
+        r.line.driver.buttons().mode(4),
+        crate::devices::button::TOGGLE_OFF
+    );
+    let want = r.expected(&r.log(), &[]);
+    assert!(want.iter().any(|e| matches!(e, Event::Button(_, _, 0))));
+    assert_same(&r.events.borrow(), &want);
+}
