@@ -72,7 +72,7 @@ pub fn encoder(seq: u64, i: usize) -> i32 {
 pub struct SentRecord {
     /// Record count since power-on.
     pub seq: u64,
-    /// When its first half left.
+    /// When its first byte left.
     pub at: Instant,
     /// The layout it had.
     pub layout: Layout,
@@ -92,7 +92,9 @@ pub struct CerealSim {
     rx: Rx,
     command: [u8; 10],
     layout: Option<Layout>,
-    pending: VecDeque<(Instant, Vec<u8>)>,
+    /// Everything to send, in order: due time, bytes, and the record whose first byte they
+    /// are (logged when it leaves).
+    pending: VecDeque<(Instant, Vec<u8>, Option<SentRecord>)>,
     silent: bool,
     ignore: u32,
     seq: u64,
@@ -167,7 +169,7 @@ impl CerealSim {
 
     /// Sends `bytes` as they are, at `now`.
     pub fn send_raw(&mut self, bytes: &[u8], now: Now) {
-        self.pending.push_back((now.mono, bytes.to_vec()));
+        self.pending.push_back((now.mono, bytes.to_vec(), None));
     }
 
     /// Forgets the record log.
@@ -176,7 +178,7 @@ impl CerealSim {
     }
 
     fn reply(&mut self, at: Instant, bytes: &[u8]) {
-        self.pending.push_back((at, bytes.to_vec()));
+        self.pending.push_back((at, bytes.to_vec(), None));
     }
 
     fn record(&mut self, now: Now) {
@@ -195,12 +197,10 @@ impl CerealSim {
             layout.encode(buttons(seq), &analogs, &encoders);
         let at = now.mono + self.cfg.reply_delay;
         let half = len / 2;
-        self.reply(at, &bytes[..half]);
+        let rec = SentRecord { seq, at, layout };
+        self.pending
+            .push_back((at, bytes[..half].to_vec(), Some(rec)));
         self.reply(at + self.cfg.second_half_after, &bytes[half..len]);
-        if self.log.len() == LOG_CAP {
-            self.log.pop_front();
-        }
-        self.log.push_back(SentRecord { seq, at, layout });
     }
 }
 
@@ -245,16 +245,26 @@ impl DeviceModel for CerealSim {
     }
 
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
-        while self.pending.front().is_some_and(|(t, _)| *t <= now.mono) {
-            if let Some((_, bytes)) = self.pending.pop_front() {
-                if !self.silent {
-                    out.extend_from_slice(&bytes);
+        while self.pending.front().is_some_and(|(t, ..)| *t <= now.mono) {
+            let Some((_, bytes, rec)) = self.pending.pop_front() else {
+                break;
+            };
+            if self.silent {
+                continue;
+            }
+            out.extend_from_slice(&bytes);
+            if let Some(mut rec) = rec {
+                // It leaves now, which is later than planned if something went first.
+                rec.at = now.mono;
+                if self.log.len() == LOG_CAP {
+                    self.log.pop_front();
                 }
+                self.log.push_back(rec);
             }
         }
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.pending.front().map(|(t, _)| *t)
+        self.pending.front().map(|(t, ..)| *t)
     }
 }

@@ -110,7 +110,9 @@ pub struct MagellanSim {
     cfg: SimConfig,
     line: Vec<u8>,
     last_rx: Option<Instant>,
-    pending: VecDeque<(Instant, Vec<u8>)>,
+    /// Everything to send, in order: due time, bytes, and the record whose first byte they
+    /// are (logged when it leaves).
+    pending: VecDeque<(Instant, Vec<u8>, Option<SentRecord>)>,
     mode: u8,
     null_radius: u8,
     three_d: bool,
@@ -125,7 +127,7 @@ pub struct MagellanSim {
     pub first_byte_at: Option<Instant>,
     /// When the last command was complete.
     pub last_command_at: Option<Instant>,
-    /// Every streamed record (the last [`LOG_CAP`]).
+    /// Every streamed record, with the time its first byte left (the last [`LOG_CAP`]).
     pub log: VecDeque<SentRecord>,
 }
 
@@ -176,7 +178,7 @@ impl MagellanSim {
 
     /// Sends `bytes` as they are, at `now`.
     pub fn send_raw(&mut self, bytes: &[u8], now: Now) {
-        self.pending.push_back((now.mono, bytes.to_vec()));
+        self.pending.push_back((now.mono, bytes.to_vec(), None));
     }
 
     /// Characters lost because they came too fast.
@@ -199,7 +201,7 @@ impl MagellanSim {
 
     fn reply(&mut self, now: Now, bytes: &[u8]) {
         self.pending
-            .push_back((now.mono + self.cfg.reply_delay, bytes.to_vec()));
+            .push_back((now.mono + self.cfg.reply_delay, bytes.to_vec(), None));
     }
 
     fn command(&mut self, now: Now) {
@@ -229,7 +231,9 @@ impl MagellanSim {
         self.last_command_at = Some(now.mono);
     }
 
-    fn stream(&mut self, now: Now, out: &mut Vec<u8>) {
+    /// Queues the records due by `now`: a UART sends everything in order, so a record waits
+    /// behind answers queued before it, and nothing comes between its halves.
+    fn stream(&mut self, now: Now) {
         if !(self.three_d && self.moving) {
             self.next_record = None;
             return;
@@ -255,18 +259,15 @@ impl MagellanSim {
                         MAX_RECORD
                     }
                 };
-                let (half, rest_at) = (len / 2, t + self.cfg.second_half_after);
-                if rest_at <= now.mono {
-                    // Caught up late: the whole record has left.
-                    out.extend_from_slice(&bytes[..len]);
-                } else {
-                    out.extend_from_slice(&bytes[..half]);
-                    self.pending.push_back((rest_at, bytes[half..len].to_vec()));
-                }
-                if self.log.len() == LOG_CAP {
-                    self.log.pop_front();
-                }
-                self.log.push_back(SentRecord { seq, at: t, sent });
+                let half = len / 2;
+                let rec = SentRecord { seq, at: t, sent };
+                self.pending
+                    .push_back((t, bytes[..half].to_vec(), Some(rec)));
+                self.pending.push_back((
+                    t + self.cfg.second_half_after,
+                    bytes[half..len].to_vec(),
+                    None,
+                ));
             }
             t += self.cfg.period;
         }
@@ -297,18 +298,28 @@ impl DeviceModel for MagellanSim {
     }
 
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
-        while self.pending.front().is_some_and(|(t, _)| *t <= now.mono) {
-            if let Some((_, bytes)) = self.pending.pop_front() {
-                if !self.silent {
-                    out.extend_from_slice(&bytes);
+        self.stream(now);
+        while self.pending.front().is_some_and(|(t, ..)| *t <= now.mono) {
+            let Some((_, bytes, rec)) = self.pending.pop_front() else {
+                break;
+            };
+            if self.silent {
+                continue;
+            }
+            out.extend_from_slice(&bytes);
+            if let Some(mut rec) = rec {
+                // It leaves now, which is later than planned if answers went first.
+                rec.at = now.mono;
+                if self.log.len() == LOG_CAP {
+                    self.log.pop_front();
                 }
+                self.log.push_back(rec);
             }
         }
-        self.stream(now, out);
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        let reply = self.pending.front().map(|(t, _)| *t);
+        let reply = self.pending.front().map(|(t, ..)| *t);
         let record = if self.three_d && self.moving {
             self.next_record
         } else {
