@@ -4,8 +4,11 @@
 //! [`SerialDriver`]: crate::serial::SerialDriver
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
 
+pub mod cerealbox;
 pub mod dyna;
 pub mod fastrak;
 pub mod flock;
 pub mod joylin;
+pub mod magellan;
 mod notes;
+mod stack_text;

@@ -395,6 +395,17 @@ impl ButtonServer {
 
     /// Sends one Change per changed button (toggle semantics per mode), in index order.
     pub fn report_changes(&self) {
+        self.send_changes(true);
+    }
+
+    /// Sends one Change per button whose physical state changed, in index order, ignoring
+    /// toggle modes: what C++ drivers that call the plain `vrpn_Button::report_changes` send
+    /// (the Magellan and the CerealBox), although clients may still set modes.
+    pub fn report_changes_unfiltered(&self) {
+        self.send_changes(false);
+    }
+
+    fn send_changes(&self, filtered: bool) {
         // (button, state, alert event or 0); built first so no borrow is held while sending.
         let mut out = [(0i32, 0i32, 0i32); MAX_BUTTONS];
         let mut n = 0;
@@ -402,7 +413,8 @@ impl ButtonServer {
             let mut s = self.state.borrow_mut();
             for i in 0..s.num {
                 let (now, last) = (s.buttons[i], s.last[i]);
-                match s.modes[i] {
+                let mode = if filtered { s.modes[i] } else { MOMENTARY };
+                match mode {
                     TOGGLE_ON if now != 0 && last == 0 => {
                         s.modes[i] = TOGGLE_OFF;
                         out[n] = (i as i32, 0, TOGGLE_OFF);

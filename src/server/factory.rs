@@ -8,10 +8,12 @@ use crate::devices::dial::DialExample;
 use crate::devices::text_device::TextExample;
 use crate::devices::tracker::{TrackerNull, TrackerSpin};
 use crate::devices::ServerDevice;
+use crate::drivers::cerealbox::CerealBoxDriver;
 use crate::drivers::dyna::DynaDriver;
 use crate::drivers::fastrak::FastrakDriver;
 use crate::drivers::flock::{FlockDriver, FlockParallelPort};
 use crate::drivers::joylin::JoylinDriver;
+use crate::drivers::magellan::MagellanDriver;
 use crate::layered::{TrackerAnalogFly, TrackerButtonFly};
 use crate::serial::SerialDevice;
 
@@ -86,6 +88,14 @@ fn build_one(entry: &DeviceEntry, conn: &Connection) -> Result<Vec<Box<dyn Serve
         DeviceConfig::Joylin(c) => {
             let driver = JoylinDriver::new(c, conn).map_err(at)?;
             Ok(vec![Box::new(SerialDevice::new(&c.device, driver, conn))])
+        }
+        DeviceConfig::CerealBox(c) => {
+            let driver = CerealBoxDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
+        }
+        DeviceConfig::Magellan(c) => {
+            let driver = MagellanDriver::new(c, conn).map_err(at)?;
+            Ok(vec![Box::new(SerialDevice::new(&c.port, driver, conn))])
         }
         DeviceConfig::FlockParallel(c) => {
             let ports = FlockParallelPort::new_group(c, conn).map_err(at)?;
