@@ -10,5 +10,4 @@ pub mod fastrak;
 pub mod flock;
 pub mod joylin;
 pub mod magellan;
-mod notes;
 mod stack_text;

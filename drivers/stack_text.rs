@@ -4,7 +4,7 @@
 use std::fmt::{self, Write as _};
 
 /// Longest message kept; longer text is cut at a character boundary.
-const CAPACITY: usize = 256;
+const CAPACITY: usize = 320;
 
 /// Formats `args` into a fixed buffer and hands the text to `send`.
 pub(crate) fn with_text(args: fmt::Arguments<'_>, send: impl FnOnce(&str)) {

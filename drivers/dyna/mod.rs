@@ -49,7 +49,7 @@ use std::time::{Duration, Instant};
 use self::framing::{Framed, Framer};
 use self::record::IDENTITY_XYZW;
 use self::reset::{Failure, Progress, ResetSequence, STATUS_LEN};
-use super::notes::TextBuf;
+use super::stack_text::with_text;
 use crate::devices::text::TextSeverity;
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
 use crate::server::config;
@@ -153,9 +153,9 @@ impl DynaDriver {
 
     fn say(&self, severity: TextSeverity, args: std::fmt::Arguments<'_>) {
         // A failed send is the connection's business (it reports and drops the peer).
-        let _ = self
-            .tracker
-            .send_text(severity, 0, TextBuf::format(args).as_str());
+        with_text(args, |text| {
+            let _ = self.tracker.send_text(severity, 0, text);
+        });
     }
 
     fn progress(&mut self, p: Progress, now: Now) {

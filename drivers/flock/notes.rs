@@ -1,51 +1,17 @@
 //! Text messages from the tracker, formatted on the stack (no allocation).
 
-use std::fmt::{self, Write as _};
+use std::fmt;
 
 use crate::devices::text::TextSeverity;
+use crate::drivers::stack_text::with_text;
 use crate::TrackerServer;
 
 /// Formats `args` into a fixed buffer and sends it as a text message from `tracker`.
 pub fn say(tracker: &TrackerServer, severity: TextSeverity, args: fmt::Arguments<'_>) {
-    let mut text = TextBuf::default();
-    let _ = text.write_fmt(args);
     // A failed send is the connection's business (it reports and drops the peer).
-    let _ = tracker.send_text(severity, 0, text.as_str());
-}
-
-/// A fixed buffer for one message; longer text is cut at a character boundary.
-struct TextBuf {
-    buf: [u8; 320],
-    len: usize,
-}
-
-impl Default for TextBuf {
-    fn default() -> TextBuf {
-        TextBuf {
-            buf: [0; 320],
-            len: 0,
-        }
-    }
-}
-
-impl TextBuf {
-    fn as_str(&self) -> &str {
-        // Only whole characters are ever copied in.
-        std::str::from_utf8(&self.buf[..self.len]).unwrap_or("")
-    }
-}
-
-impl fmt::Write for TextBuf {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let room = self.buf.len() - self.len;
-        let mut n = s.len().min(room);
-        while !s.is_char_boundary(n) {
-            n -= 1;
-        }
-        self.buf[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
-        self.len += n;
-        Ok(())
-    }
+    with_text(args, |text| {
+        let _ = tracker.send_text(severity, 0, text);
+    });
 }
 
 /// The units a system-status answer shows as not accessible or not running, as

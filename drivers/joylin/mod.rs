@@ -50,7 +50,7 @@ mod tests;
 use std::time::Instant;
 
 use self::event::{Framer, JsEvent, Kind};
-use super::notes::TextBuf;
+use super::stack_text::with_text;
 use crate::devices::text::TextSeverity;
 use crate::serial::{PortKind, PortOps, SerialDriver};
 use crate::server::config;
@@ -132,9 +132,9 @@ impl JoylinDriver {
 
     fn say(&self, severity: TextSeverity, args: std::fmt::Arguments<'_>) {
         // A failed send is the connection's business (it reports and drops the peer).
-        let _ = self
-            .analog
-            .send_text(severity, 0, TextBuf::format(args).as_str());
+        with_text(args, |text| {
+            let _ = self.analog.send_text(severity, 0, text);
+        });
     }
 
     /// Applies an event to the state; false when it was ignored.
