@@ -88,7 +88,7 @@ mod tests {
         assert_eq!(got, "z\\rm3\\x01");
         let long = "é".repeat(200);
         with_text(format_args!("{long}"), |t| got = t.to_owned());
-        assert_eq!(got.len(), 256);
+        assert_eq!(got.len(), CAPACITY);
         assert!(got.chars().all(|c| c == 'é'));
     }
 }
