@@ -64,9 +64,15 @@ pub mod server;
 pub mod time;
 pub mod wire;
 
-pub use connection::{Connection, ConnectionEvent, ConnectionState, Limits, Notice, Severity};
+pub use connection::{
+    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, Limits, Notice, ServiceClass,
+    Severity,
+};
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
-pub use devices::button::{ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonStates};
+pub use devices::builder::RemoteBuilder;
+pub use devices::button::{
+    ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonState, ButtonStates,
+};
 pub use devices::dial::{DialExample, DialRemote, DialServer, DialUpdate};
 pub use devices::text::TextSeverity;
 pub use devices::text_device::{TextExample, TextMessage, TextReceiver, TextSender};
@@ -80,3 +86,7 @@ pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
 pub use net::Reactor;
 pub use time::{Now, TimeVal};
+
+/// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
+/// so an application uses the same version without naming it in its own manifest.
+pub use nalgebra;

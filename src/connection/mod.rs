@@ -19,8 +19,10 @@
 pub mod dispatch;
 mod liveness;
 pub mod names;
+mod open;
 mod printer;
 mod replay_control;
+mod service;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -29,7 +31,7 @@ use std::rc::{Rc, Weak};
 use std::time::{Duration, Instant};
 
 use crate::error::Error;
-use crate::name::{DeviceName, Location};
+use crate::name::DeviceName;
 use crate::net::shell::Shell;
 use crate::net::{PassClock, Reactor};
 use crate::proto::{Delivery, Session};
@@ -38,8 +40,10 @@ use crate::wire;
 use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
 pub(crate) use liveness::Liveness;
+pub use open::ConnectionOptions;
 pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
 pub use replay_control::ReplayControl;
+pub use service::ServiceClass;
 
 pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 
@@ -170,23 +174,11 @@ impl Connection {
     }
 
     fn open_location_in(name: &DeviceName, reactor: Option<&Reactor>) -> Result<Connection, Error> {
-        match &name.location {
-            Location::Loopback => Ok(Connection::loopback()),
-            Location::File { path } => {
-                Self::shared(&name.location_text, || Connection::replay_file(path))
-            }
-            Location::Net {
-                host,
-                port,
-                tcp_only,
-            } => Self::shared(&name.location_text, || {
-                let reactor = match reactor {
-                    Some(r) => r.clone(),
-                    None => new_reactor()?,
-                };
-                Connection::client_in(&reactor, host, *port, *tcp_only, Limits::default())
-            }),
-        }
+        let options = ConnectionOptions {
+            reactor: reactor.cloned(),
+            ..ConnectionOptions::default()
+        };
+        Self::open_location_with(name, &options)
     }
 
     /// The live connection opened for this location text, or a new one from `make` (C++
@@ -438,26 +430,38 @@ impl Connection {
 
     /// Sends a message to every connected peer and to local handlers.
     ///
-    /// `class_of_service` is a mask of [`wire::class`] bits: RELIABLE goes over TCP, anything
-    /// else over UDP once the peer announced a UDP port. A peer that has not completed its
-    /// handshake does not get the message (as in C++); see [`connected`](Self::connected).
-    /// Allocation-free.
+    /// `class_of_service` is a [`ServiceClass`] (or its raw `u32` mask): RELIABLE goes over
+    /// TCP, anything else over UDP once the peer announced a UDP port. Allocation-free.
+    ///
+    /// Before the connection is up nothing is queued (as in C++, a message is sent only to
+    /// peers that completed their handshake), and the result says so: a client that is
+    /// [`Connecting`](ConnectionState::Connecting) or
+    /// [`Reconnecting`](ConnectionState::Reconnecting) returns [`Error::NotConnected`] and
+    /// sends nothing, not even to local handlers. Send requests again once
+    /// [`on_state_change`](Self::on_state_change) reports `Connected`. A server with no
+    /// client is not an error: its reports go to whoever is connected, which may be nobody.
     pub fn pack_message(
         &self,
         time: TimeVal,
         type_id: TypeId,
         sender: SenderId,
         payload: &[u8],
-        class_of_service: u32,
+        class_of_service: impl Into<ServiceClass>,
     ) -> Result<(), Error> {
         if payload.len() > MAX_PAYLOAD {
             return Err(Error::PayloadTooLarge(payload.len()));
         }
         {
             let mut core = self.inner.core.borrow_mut();
-            let overflowed =
-                core.session
-                    .pack(time, sender.0, type_id.0, payload, class_of_service);
+            let state = core.session.state();
+            if matches!(
+                state,
+                ConnectionState::Connecting | ConnectionState::Reconnecting
+            ) {
+                return Err(Error::NotConnected(state));
+            }
+            let class = class_of_service.into().bits();
+            let overflowed = core.session.pack(time, sender.0, type_id.0, payload, class);
             if overflowed {
                 // Rare: a peer is not reading. Only now is the time needed (for the drop).
                 core.session.drop_backlogged(self.inner.clock.now());

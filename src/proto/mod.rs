@@ -91,7 +91,7 @@ pub struct Notice {
 }
 
 /// Limits and timings of a connection. The defaults suit a lab network.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
     /// Reliable output that may wait for one peer before the peer is dropped as not reading.
     pub max_pending_output: usize,
