@@ -22,14 +22,34 @@
 //! }
 //! ```
 //!
+//! # Where to start
+//!
+//! - The remotes ([`TrackerRemote`], [`ButtonRemote`], [`AnalogRemote`], [`DialRemote`], ...)
+//!   read devices: callbacks, or the latest state a frame loop polls (`pose`, `take_pose`,
+//!   `seq`, arrival times). [`RemoteBuilder`] opens one with [`Limits`] or options.
+//! - The servers ([`TrackerServer`], [`ButtonServer`], ...) report devices on a
+//!   [`Connection::server`]; [`Connection`] also carries an application's own messages.
+//! - docs/USING.md in the repository is the guide: threads, shared connections, when
+//!   callbacks run, replying from a handler, polling versus callbacks, sending before the
+//!   connection is up.
+//!
+//! # Threads
+//!
+//! A connection and every device on it belong to the thread that made them: they are not
+//! `Send` (the handles are `Rc`s, and callbacks need not be `Send`). Connection sharing
+//! (`Tracker0@host` and `Button0@host` use one connection) and `loopback:` are per thread.
+//! An engine whose resources must be `Send` runs the remotes on a worker thread that calls
+//! `mainloop()` and publishes the latest states (see `examples/worker_thread.rs`).
+//!
 //! # Layers
 //!
 //! Each layer is a module and uses only those below it:
 //!
-//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads);
-//!   [`log`] the same for `.vrpn` log files; [`time`] the timestamps and [`Now`].
-//! - [`proto`]: the protocol without sockets or clock — a [`proto::Session`] is fed bytes and
-//!   the time and hands back bytes, I/O requests, deliveries and its next deadline.
+//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads), for
+//!   tools that read or write VRPN bytes; [`log`] the same for `.vrpn` log files; [`time`]
+//!   the timestamps and [`Now`].
+//! - The protocol without sockets or clock (internal): a session is fed bytes and the time
+//!   and hands back bytes, I/O requests, deliveries and its next deadline.
 //! - [`net`]: the shell — a [`Reactor`] (one poll shared by every connection and serial port
 //!   of a loop) and the sockets; the only place that reads the clock.
 //! - [`connection`]: the public [`Connection`]: names, handlers, `mainloop()`.
@@ -58,6 +78,9 @@ pub mod layered;
 pub mod log;
 pub mod name;
 pub mod net;
+// The protocol layer (sessions, endpoints, name tables): internal, public only for the
+// crate's own simulation tests. Its user-facing types are re-exported from `connection`.
+#[doc(hidden)]
 pub mod proto;
 pub mod serial;
 pub mod server;

@@ -45,6 +45,7 @@ pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
 pub use replay_control::ReplayControl;
 pub use service::ServiceClass;
 
+pub use crate::proto::clock::{ClockSyncConfig, Estimate};
 pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 
 /// Largest payload a VRPN peer can receive over TCP (64000-byte buffer less the header).
@@ -315,14 +316,14 @@ impl Connection {
     ///
     /// `offset` is the peer's clock minus ours in seconds; message times are translated with
     /// it (`local = sender − offset`), and the true offset lies within `± uncertainty`.
-    pub fn clock_estimate(&self) -> Option<crate::proto::clock::Estimate> {
+    pub fn clock_estimate(&self) -> Option<Estimate> {
         let now = self.now();
         self.inner.core.borrow().session.clock_estimate(now)
     }
 
     /// Each connected peer's address and clock estimate (see
     /// [`clock_estimate`](Self::clock_estimate)); a server learns each client's clock this way.
-    pub fn peer_clocks(&self) -> Vec<(String, Option<crate::proto::clock::Estimate>)> {
+    pub fn peer_clocks(&self) -> Vec<(String, Option<Estimate>)> {
         let now = self.now();
         self.inner.core.borrow().session.peer_clocks(now)
     }
