@@ -421,8 +421,13 @@ impl Connection {
         self.inner.peer_senders.add(f)
     }
 
-    /// Calls `f` whenever [`state`](Self::state) changes (Connecting → Connected →
-    /// Reconnecting → Connected …, or Listening ↔ Connected for a server).
+    /// Calls `f` whenever [`state`](Self::state) changes, inside `mainloop()`.
+    ///
+    /// A client goes Connecting → Connected; when the server is lost (dropped, closed,
+    /// silent), Connected → Reconnecting at once — that transition *is* the drop — and
+    /// Reconnecting → Connected when it is back. A server goes Listening ↔ Connected as its
+    /// first client arrives and its last leaves. The four raw events
+    /// ([`on_event`](Self::on_event)) are still delivered beside these.
     pub fn on_state_change(&self, f: impl FnMut(&ConnectionState) + 'static) -> HandlerId {
         self.inner.states.add(f)
     }

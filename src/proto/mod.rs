@@ -38,7 +38,8 @@ pub enum ConnectionState {
     /// Client: connected to the server. Server: at least one peer connected. Loopback and
     /// replay: always.
     Connected,
-    /// Client: was connected, lost the server, and keeps trying.
+    /// Client: was connected, lost the server (the change to this state is the drop), and
+    /// keeps trying.
     Reconnecting,
     /// Server: listening, no peer connected.
     Listening,
