@@ -113,3 +113,12 @@ pub use time::{Now, TimeVal};
 /// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
 /// so an application uses the same version without naming it in its own manifest.
 pub use nalgebra;
+
+// The README's complete program and the guide's snippets are compiled as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/USING.md")]
+struct UsingDoctests;
