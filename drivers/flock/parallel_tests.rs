@@ -157,7 +157,7 @@ impl Rig {
                 assert_eq!(p.time, self.arrival_wall(rec), "{rec:?}");
             }
         }
-        assert!(poses.iter().all(|p| (p.sensor as usize) < self.receivers));
+        assert!(poses.iter().all(|p| p.sensor < self.receivers));
     }
 }
 
