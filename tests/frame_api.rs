@@ -352,3 +352,36 @@ fn log_errors_say_missing_or_damaged() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_clock_sync_sender_is_not_offered_as_a_device() {
+    let (srv, port) = server();
+    let _tracker = TrackerServer::new("Tracker0", &srv, 1).unwrap();
+    // A first client synchronises clocks: the server now has its clock-sync names, which
+    // it describes to every later client along with its devices.
+    let first = Connection::client("127.0.0.1", port, false, Limits::default()).unwrap();
+    connect(&first, &srv);
+    pump(
+        &[&first, &srv],
+        Duration::from_secs(5),
+        "clock sync",
+        || first.clock_estimate().is_some(),
+    );
+    let second = Connection::client("127.0.0.1", port, false, Limits::default()).unwrap();
+    let offered = Rc::new(RefCell::new(Vec::new()));
+    let o = offered.clone();
+    second.on_peer_sender(move |name| o.borrow_mut().push(name.to_string()));
+    pump(
+        &[&first, &second, &srv],
+        Duration::from_secs(5),
+        "2nd",
+        || second.connected(),
+    );
+    run(&[&first, &second, &srv], Duration::from_millis(300));
+    // "VRPN Control" is the system sender every server (C++ too) describes.
+    let devices = |names: Vec<String>| -> Vec<String> {
+        names.into_iter().filter(|n| n != "VRPN Control").collect()
+    };
+    assert_eq!(devices(second.peer_senders()), ["Tracker0"]);
+    assert_eq!(devices(offered.borrow().clone()), ["Tracker0"]);
+}

@@ -696,7 +696,7 @@ impl ForceDeviceServer {
         )
     }
 
-    /// Sends a surface contact point (LOW_LATENCY).
+    /// Sends a surface contact point (LOW_LATENCY); `quat` in (x, y, z, w) order.
     pub fn report_scp(&self, time: TimeVal, pos: [f64; 3], quat: [f64; 4]) -> Result<(), Error> {
         let mut buf = [0u8; codec::Scp::LEN];
         codec::Scp { pos, quat }.encode(&mut buf);

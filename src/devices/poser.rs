@@ -1,5 +1,6 @@
 //! Poser: the client requests poses and velocities; the server clamps, stores
 //! and calls back. Quirks of the C++ remote and server are kept for wire compatibility.
+//! Every quaternion here is `[f64; 4]` in VRPN's (x, y, z, w) order.
 
 use std::cell::RefCell;
 use std::ops::Deref;
@@ -179,11 +180,11 @@ pub struct PoserState {
     pub time: TimeVal,
     /// Position (clamped to the workspace).
     pub pos: [f64; 3],
-    /// Orientation.
+    /// Orientation (x, y, z, w).
     pub quat: [f64; 4],
     /// Velocity (clamped to [-1, 1]).
     pub vel: [f64; 3],
-    /// Velocity rotation.
+    /// Velocity rotation (x, y, z, w).
     pub vel_quat: [f64; 4],
     /// Velocity rotation interval.
     pub vel_quat_dt: f64,
