@@ -385,3 +385,48 @@ fn the_clock_sync_sender_is_not_offered_as_a_device() {
     assert_eq!(devices(second.peer_senders()), ["Tracker0"]);
     assert_eq!(devices(offered.borrow().clone()), ["Tracker0"]);
 }
+
+/// The default printer (defect 4): a device's warning nobody registered for is one line on
+/// stderr, nothing on stdout, and a later connection — which may reuse the memory of a
+/// dropped one — still gets its warnings printed. Runs in a child process, whose output
+/// this test reads.
+#[test]
+fn default_printer_is_one_stderr_line_per_warning_on_every_connection() {
+    if std::env::var_os("VRPN_PRINTER_CHILD").is_some() {
+        for round in ["first", "second", "third"] {
+            let conn = Connection::new_loopback();
+            let server = TrackerServer::new("Tracker0", &conn, 1).unwrap();
+            let _remote = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+            server
+                .send_text(vrpn::TextSeverity::Warning, 0, &format!("{round} warning"))
+                .unwrap();
+            conn.mainloop().unwrap();
+        }
+        return;
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([
+            "--exact",
+            "default_printer_is_one_stderr_line_per_warning_on_every_connection",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env("VRPN_PRINTER_CHILD", "1")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stdout.contains("from Tracker0"),
+        "printed to stdout: {stdout}"
+    );
+    for round in ["first", "second", "third"] {
+        let lines: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.contains(&format!("{round} warning")))
+            .collect();
+        assert_eq!(lines.len(), 1, "{round}: {stderr}");
+        assert!(lines[0].contains("from Tracker0"), "{}", lines[0]);
+    }
+}

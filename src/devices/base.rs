@@ -258,7 +258,7 @@ impl RemoteCore {
         time: TimeVal,
         type_id: TypeId,
         payload: &[u8],
-        class_of_service: u32,
+        class_of_service: impl Into<crate::connection::ServiceClass>,
     ) -> Result<(), Error> {
         self.conn
             .pack_message(time, type_id, self.base.sender, payload, class_of_service)
