@@ -205,9 +205,15 @@ fn clamp3(v: &mut [f64; 3], lo: f64, hi: f64) {
 /// Server half (C++ `vrpn_Poser_Server`): position clamped to [-1, 1] on every axis.
 pub struct PoserServer {
     shared: Rc<ServerShared>,
+    sender: crate::dispatch::SenderId,
 }
 
 impl PoserServer {
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> crate::dispatch::SenderId {
+        self.sender
+    }
+
     /// Registers `device` on a server (or loopback) connection.
     pub fn new(device: &str, conn: &Connection) -> Result<PoserServer, Error> {
         let (base, ids) = base::register_server(conn, device, PoserIds::register)?;
@@ -290,7 +296,7 @@ impl PoserServer {
             st.vel_quat_dt += r.vel_quat_dt;
             clamp3(&mut st.vel, -1.0, 1.0);
         });
-        Ok(PoserServer { shared })
+        Ok(PoserServer { shared, sender })
     }
 
     /// Calls `f` with the clamped pose after each absolute pose request.
