@@ -348,11 +348,11 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
                 "{}",
                 json_report(&dv, "button", c.time, |m| {
                     m.serialize_entry("button", &c.button)?;
-                    m.serialize_entry("state", &c.state)
+                    m.serialize_entry("state", &c.state.raw())
                 })
             );
         } else {
-            let what = if c.state != 0 { "pressed" } else { "released" };
+            let what = if c.state.is_pressed() { "pressed" } else { "released" };
             outln!(
                 "##########################################\nButton {l}, number {} was just {what}\n##########################################",
                 c.button
@@ -365,13 +365,14 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
             outln!(
                 "{}",
                 json_report(&dv, "button_states", st.time, |m| {
-                    m.serialize_entry("states", st.as_slice())
+                    let raw: Vec<i32> = st.as_slice().iter().map(|b| b.raw()).collect();
+                    m.serialize_entry("states", &raw)
                 })
             );
         } else {
             let mut s = format!("Button {l} has {} buttons with states:", st.num_buttons);
             for v in st.as_slice() {
-                let _ = write!(s, " {v}");
+                let _ = write!(s, " {}", v.raw());
             }
             outln!("{s}");
         }

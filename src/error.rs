@@ -2,11 +2,18 @@
 
 use std::io;
 
+use std::path::PathBuf;
+
+use crate::log::LogError;
 use crate::name::NameError;
 use crate::proto::names::NameLimit;
+use crate::proto::ConnectionState;
 
 /// Errors returned by connection set-up and by calls that can fail.
+///
+/// New variants may be added: match with a `_` arm.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum Error {
     /// The device name cannot be parsed.
     Name(NameError),
@@ -28,15 +35,34 @@ pub enum Error {
     NameLimit(NameLimit),
     /// A message payload is larger than a VRPN peer accepts.
     PayloadTooLarge(usize),
-    /// A log file cannot be written or read (file, offset and problem in the text).
+    /// A log file cannot be written or read (file, offset and problem in the text); see
+    /// also [`LogNotFound`](Self::LogNotFound) and [`LogDamaged`](Self::LogDamaged).
     Log(String),
+    /// The log file to read does not exist.
+    LogNotFound {
+        /// The path as given.
+        path: PathBuf,
+    },
+    /// The log file is not a VRPN log or is damaged (bad cookie, truncated or corrupt entry):
+    /// the inner error names file, offset and problem.
+    LogDamaged(LogError),
+    /// A client sent before its connection was up (or while it reconnects): nothing was
+    /// sent. The state it was in is given.
+    NotConnected(ConnectionState),
     /// The operation needs a different kind of connection (e.g. a server socket on a client).
     Unsupported(&'static str),
 }
 
 impl Error {
-    pub(crate) fn from_log(e: crate::log::LogError) -> Error {
-        Error::Log(e.to_string())
+    /// A log error as the variant a user matches: not found, damaged, or other.
+    pub(crate) fn from_log(e: LogError) -> Error {
+        match e {
+            LogError::Io { path, error, .. } if error.kind() == io::ErrorKind::NotFound => {
+                Error::LogNotFound { path }
+            }
+            e @ (LogError::BadCookie { .. } | LogError::BadEntry { .. }) => Error::LogDamaged(e),
+            e => Error::Log(e.to_string()),
+        }
     }
 
     pub(crate) fn io(context: impl Into<String>, source: io::Error) -> Error {
@@ -64,6 +90,14 @@ impl std::fmt::Display for Error {
                 crate::wire::MAX_PAYLOAD
             ),
             Error::Log(text) => f.write_str(text),
+            Error::LogNotFound { path } => {
+                write!(f, "{}: no such log file", path.display())
+            }
+            Error::LogDamaged(e) => e.fmt(f),
+            Error::NotConnected(state) => write!(
+                f,
+                "not sent: the connection is not up yet ({state:?}); send once it is Connected"
+            ),
             Error::Unsupported(what) => write!(f, "not supported: {what}"),
         }
     }
@@ -74,6 +108,7 @@ impl std::error::Error for Error {
         match self {
             Error::Io { source, .. } => Some(source),
             Error::Name(e) => Some(e),
+            Error::LogDamaged(e) => Some(e),
             _ => None,
         }
     }

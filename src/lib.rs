@@ -22,14 +22,34 @@
 //! }
 //! ```
 //!
+//! # Where to start
+//!
+//! - The remotes ([`TrackerRemote`], [`ButtonRemote`], [`AnalogRemote`], [`DialRemote`], ...)
+//!   read devices: callbacks, or the latest state a frame loop polls (`pose`, `take_pose`,
+//!   `seq`, arrival times). [`RemoteBuilder`] opens one with [`Limits`] or options.
+//! - The servers ([`TrackerServer`], [`ButtonServer`], ...) report devices on a
+//!   [`Connection::server`]; [`Connection`] also carries an application's own messages.
+//! - docs/USING.md in the repository is the guide: threads, shared connections, when
+//!   callbacks run, replying from a handler, polling versus callbacks, sending before the
+//!   connection is up.
+//!
+//! # Threads
+//!
+//! A connection and every device on it belong to the thread that made them: they are not
+//! `Send` (the handles are `Rc`s, and callbacks need not be `Send`). Connection sharing
+//! (`Tracker0@host` and `Button0@host` use one connection) and `loopback:` are per thread.
+//! An engine whose resources must be `Send` runs the remotes on a worker thread that calls
+//! `mainloop()` and publishes the latest states (see `examples/worker_thread.rs`).
+//!
 //! # Layers
 //!
 //! Each layer is a module and uses only those below it:
 //!
-//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads);
-//!   [`log`] the same for `.vrpn` log files; [`time`] the timestamps and [`Now`].
-//! - [`proto`]: the protocol without sockets or clock — a [`proto::Session`] is fed bytes and
-//!   the time and hands back bytes, I/O requests, deliveries and its next deadline.
+//! - [`wire`]: the pure codec over byte slices (header, cookie, descriptions, payloads), for
+//!   tools that read or write VRPN bytes; [`log`] the same for `.vrpn` log files; [`time`]
+//!   the timestamps and [`Now`].
+//! - The protocol without sockets or clock (internal): a session is fed bytes and the time
+//!   and hands back bytes, I/O requests, deliveries and its next deadline.
 //! - [`net`]: the shell — a [`Reactor`] (one poll shared by every connection and serial port
 //!   of a loop) and the sockets; the only place that reads the clock.
 //! - [`connection`]: the public [`Connection`]: names, handlers, `mainloop()`.
@@ -62,15 +82,24 @@ pub mod layered;
 pub mod log;
 pub mod name;
 pub mod net;
+// The protocol layer (sessions, endpoints, name tables): internal, public only for the
+// crate's own simulation tests. Its user-facing types are re-exported from `connection`.
+#[doc(hidden)]
 pub mod proto;
 pub mod serial;
 pub mod server;
 pub mod time;
 pub mod wire;
 
-pub use connection::{Connection, ConnectionEvent, ConnectionState, Limits, Notice, Severity};
+pub use connection::{
+    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, Limits, Notice, ServiceClass,
+    Severity,
+};
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
-pub use devices::button::{ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonStates};
+pub use devices::builder::RemoteBuilder;
+pub use devices::button::{
+    ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonState, ButtonStates,
+};
 pub use devices::dial::{DialExample, DialRemote, DialServer, DialUpdate};
 pub use devices::text::TextSeverity;
 pub use devices::text_device::{TextExample, TextMessage, TextReceiver, TextSender};
@@ -84,3 +113,16 @@ pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
 pub use net::Reactor;
 pub use time::{Now, TimeVal};
+
+/// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
+/// so an application uses the same version without naming it in its own manifest.
+pub use nalgebra;
+
+// The README's complete program and the guide's snippets are compiled as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/USING.md")]
+struct UsingDoctests;

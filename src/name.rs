@@ -6,6 +6,7 @@ use crate::wire::DEFAULT_PORT;
 
 /// Where a device's connection goes.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Location {
     /// A network server: UDP connection request and TCP call-back, or TCP only.
     Net {

@@ -43,25 +43,28 @@ fn button_changes_states_and_admin_in_process() {
     let remote = ButtonRemote::on_connection("Button0", &conn).unwrap();
     let changes = Rc::new(RefCell::new(Vec::new()));
     let c = changes.clone();
-    remote.on_change(move |b| c.borrow_mut().push((b.button, b.state, b.time)));
+    remote.on_change(move |b| c.borrow_mut().push((b.button, b.state.raw(), b.time)));
     let t = TimeVal { sec: 5, usec: 7 };
     server.set_timestamp(t);
     server.set_button(1, true);
-    server.report_changes();
+    server.report_changes().unwrap();
     conn.mainloop().unwrap();
     assert_eq!(*changes.borrow(), vec![(1, 1, t)]);
     assert!(remote.pressed(1));
     assert!(!remote.pressed(0));
     // No change, no message.
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(changes.borrow().len(), 1);
 
     // States: explicit report carries the physical states.
     let states = Rc::new(RefCell::new(Vec::new()));
     let s = states.clone();
-    remote.on_states(move |st| s.borrow_mut().push(st.as_slice().to_vec()));
+    remote.on_states(move |st| {
+        s.borrow_mut()
+            .push(st.as_slice().iter().map(|b| b.raw()).collect::<Vec<_>>())
+    });
     assert_eq!(remote.num_buttons(), 256);
-    server.report_states();
+    server.report_states().unwrap();
     assert_eq!(*states.borrow(), vec![vec![0, 1, 0]]);
     assert_eq!(remote.num_buttons(), 3);
 
@@ -78,14 +81,14 @@ fn button_changes_states_and_admin_in_process() {
     assert_eq!(server.mode(0), TOGGLE_OFF);
     changes.borrow_mut().clear();
     server.set_button(0, true);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(changes.borrow().as_slice(), &[(0, 1, t)]);
     assert_eq!(server.mode(0), TOGGLE_ON);
     server.set_button(0, false);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(changes.borrow().len(), 1);
     server.set_button(0, true);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(changes.borrow()[1], (0, 0, t));
     assert_eq!(server.mode(0), TOGGLE_OFF);
     remote.set_all_momentary().unwrap();
@@ -113,7 +116,7 @@ fn button_alerts_on_toggle() {
     server.set_alerts(true);
     server.set_mode(1, TOGGLE_OFF);
     server.set_button(1, true);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(*alerts.borrow(), vec![(1, TOGGLE_OFF), (1, TOGGLE_ON)]);
 }
 
@@ -153,11 +156,11 @@ fn dial_reports_in_process() {
     remote.on_update(move |d| g.borrow_mut().push((d.dial, d.change)));
     server.add_rotation(1, 0.25);
     server.add_rotation(1, 0.25);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(*got.borrow(), vec![(1, 0.5)]);
-    server.report_changes();
+    server.report_changes().unwrap();
     assert_eq!(got.borrow().len(), 1, "accumulators reset after sending");
-    server.report();
+    server.report().unwrap();
     assert_eq!(got.borrow()[1..], [(0, 0.0), (1, 0.0), (2, 0.0)]);
 }
 
@@ -296,7 +299,7 @@ fn one_name_exports_tracker_and_button() {
     });
     let got = Rc::new(RefCell::new(Vec::new()));
     let g = got.clone();
-    br.on_change(move |x| g.borrow_mut().push((x.button, x.state)));
+    br.on_change(move |x| g.borrow_mut().push((x.button, x.state.raw())));
     let mut pressed = false;
     let ok = pump(&[&srv], &mut [], Duration::from_secs(10), || {
         br.mainloop().unwrap();
@@ -306,7 +309,7 @@ fn one_name_exports_tracker_and_button() {
             let _ = tracker.report_pose(0, TimeVal::now(), [0.25, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]);
             if !pressed {
                 buttons.set_button(1, true);
-                buttons.report_changes();
+                buttons.report_changes().unwrap();
                 pressed = true;
             }
         }

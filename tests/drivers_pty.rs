@@ -93,7 +93,7 @@ fn fastrak_through_vrpn_server_to_a_client() {
         server.stderr.lock().unwrap()
     );
     // Every sensor 0..4 reports.
-    let mut sensors: Vec<i32> = poses.borrow().iter().map(|p| p.sensor).collect();
+    let mut sensors: Vec<usize> = poses.borrow().iter().map(|p| p.sensor).collect();
     sensors.sort_unstable();
     sensors.dedup();
     assert_eq!(sensors, vec![0, 1, 2, 3]);

@@ -265,10 +265,10 @@ fn joystick_through_vrpn_server_to_a_client_and_analogfly() {
     let flights: Rc<RefCell<Vec<TrackerPose>>> = Rc::default();
     let (r, c, f) = (reports.clone(), changes.clone(), flights.clone());
     analog.on_report(move |m| {
-        let n = m.num_channel as usize;
+        let n = m.num_channel;
         r.borrow_mut().push((m.time, m.channel[..n].to_vec()));
     });
-    buttons.on_change(move |m| c.borrow_mut().push((m.button, m.state)));
+    buttons.on_change(move |m| c.borrow_mut().push((m.button as i32, m.state.raw())));
     flyer.on_pose(move |p| f.borrow_mut().push(*p));
     let pump = || {
         analog.mainloop().unwrap();

@@ -126,17 +126,27 @@ fn button_analog_dial_stream_decodes_to_the_json_truth() {
     for (name, remote) in [("Button0", &button), ("Analog0", &joy_buttons)] {
         let g = got.clone();
         remote.on_change(move |c| {
-            g.borrow_mut()
-                .push(Ev::Change(name.into(), c.time, c.button, c.state))
+            g.borrow_mut().push(Ev::Change(
+                name.into(),
+                c.time,
+                c.button as i32,
+                c.state.raw(),
+            ))
         });
         let g = got.clone();
         remote.on_states(move |s| {
-            g.borrow_mut()
-                .push(Ev::States(name.into(), s.time, s.as_slice().to_vec()))
+            g.borrow_mut().push(Ev::States(
+                name.into(),
+                s.time,
+                s.as_slice().iter().map(|b| b.raw()).collect(),
+            ))
         });
     }
     let g = got.clone();
-    dial.on_update(move |d| g.borrow_mut().push(Ev::Dial(d.time, d.dial, d.change)));
+    dial.on_update(move |d| {
+        g.borrow_mut()
+            .push(Ev::Dial(d.time, d.dial as i32, d.change))
+    });
     let g = got.clone();
     analog.on_report(move |r| {
         g.borrow_mut()

@@ -215,8 +215,10 @@ fn magellan_through_vrpn_server_to_a_client() {
     });
     let e = events.clone();
     buttons.on_change(move |c| {
-        e.borrow_mut()
-            .push((Instant::now(), MagellanEvent::Button(c.button, c.state)))
+        e.borrow_mut().push((
+            Instant::now(),
+            MagellanEvent::Button(c.button as i32, c.state.raw()),
+        ))
     });
     let count = || events.borrow().len();
     let stderr = || server.stderr.lock().unwrap().clone();
@@ -365,13 +367,15 @@ fn cerealbox_through_vrpn_server_to_a_client() {
     });
     let e = events.clone();
     buttons.on_change(move |c| {
-        e.borrow_mut()
-            .push((Instant::now(), CerealEvent::Button(c.button, c.state)))
+        e.borrow_mut().push((
+            Instant::now(),
+            CerealEvent::Button(c.button as i32, c.state.raw()),
+        ))
     });
     let e = events.clone();
     dials.on_update(move |u| {
         e.borrow_mut()
-            .push((Instant::now(), CerealEvent::Dial(u.dial, u.change)))
+            .push((Instant::now(), CerealEvent::Dial(u.dial as i32, u.change)))
     });
     let count = || events.borrow().len();
     let stderr = || server.stderr.lock().unwrap().clone();

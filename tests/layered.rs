@@ -249,14 +249,14 @@ fn reset_button_returns_to_identity() {
     step(&conn, &mut fly, t(250_000));
     // Button 1 is not the reset button.
     btn.set_button(1, true);
-    btn.report_changes();
+    btn.report_changes().unwrap();
     conn.mainloop().unwrap();
     // 0.5 + 0.25 = 0.75
     step(&conn, &mut fly, t(375_000));
     // Press the reset button at 0.4 s: pose identity, interval restarts at 0.4 s.
     fly.set_clock(Some(t(400_000)));
     btn.set_button(0, true);
-    btn.report_changes();
+    btn.report_changes().unwrap();
     conn.mainloop().unwrap();
     assert_eq!(fly.pose(), ([0.0; 3], IDENT));
     step(&conn, &mut fly, t(500_000)); // 0.1 s since the reset: not due
@@ -287,7 +287,7 @@ fn clutch_freezes_and_resumes_absolute() {
     fly.reset();
     let clutch = |on: bool| {
         btn.set_button(1, on);
-        btn.report_changes();
+        btn.report_changes().unwrap();
         conn.mainloop().unwrap();
     };
     let any = TimeVal::new(1, 0);
@@ -339,7 +339,7 @@ fn clutch_differential_moves_only_while_held() {
     send(&conn, &mut joy, &[2.0], TimeVal::new(1, 0));
     let clutch = |on: bool| {
         btn.set_button(0, on);
-        btn.report_changes();
+        btn.report_changes().unwrap();
         conn.mainloop().unwrap();
     };
     step(&conn, &mut fly, t(125_000)); // released: 0
@@ -411,7 +411,7 @@ fn button_fly_jumps_and_flies() {
     let (_client, seen) = watch("BFly", &conn);
     let press = |i: usize, on: bool| {
         btn.set_button(i, on);
-        btn.report_changes();
+        btn.report_changes().unwrap();
         conn.mainloop().unwrap();
     };
     let step = |fly: &mut TrackerButtonFly, now: TimeVal| {
@@ -526,7 +526,7 @@ fn config_round_trip_with_local_and_remote_sources() {
     });
     // A button press reaches the plain client and BFly jumps to z = 5.
     btn.set_button(0, true);
-    btn.report_changes();
+    btn.report_changes().unwrap();
     pump(&[&srv_a, &srv_b, &client], &mut devices, || {
         br.pressed(0) && bf.pose(0).is_some_and(|p| p.pos.z == 5.0)
     });

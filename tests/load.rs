@@ -61,7 +61,7 @@ fn many_clients_receive_every_report() {
             s.last = p.time;
             if let Some((t0, t1)) = *w.borrow() {
                 if p.time >= t0 && p.time < t1 && (0..8).contains(&p.sensor) {
-                    s.in_window[p.sensor as usize] += 1;
+                    s.in_window[p.sensor] += 1;
                 }
             }
         });

@@ -50,7 +50,7 @@ fn poses_arrive(name_fmt: &str) {
     let s = seen.clone();
     client.on_pose(move |p| {
         assert_eq!(p.quat.w, 1.0);
-        s.borrow_mut()[p.sensor as usize] += 1;
+        s.borrow_mut()[p.sensor] += 1;
     });
     let vels = Rc::new(Cell::new(0));
     let v = vels.clone();

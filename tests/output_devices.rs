@@ -144,7 +144,7 @@ fn force_device_round_trip_with_tracker_and_button_under_one_name() {
         .report_pose(0, t, [0.0, 0.1, 0.0], [0.0, 0.0, 0.0, 1.0])
         .unwrap();
     buttons.set_button(0, true);
-    buttons.report_changes();
+    buttons.report_changes().unwrap();
     force.report_force(t, [1.0, -2.0, 0.5]).unwrap();
     force
         .report_scp(t, [0.0, 0.1, 0.0], [0.0, 0.0, 0.0, 1.0])

@@ -323,11 +323,11 @@ fn every_device_type_in_process_does_not_allocate() {
     tr.on_message(move |_| bump_t());
     let mut round = |i: u64| {
         buttons.set_button((i % 8) as usize, (i / 8) % 2 == 0);
-        buttons.report_changes();
+        buttons.report_changes().unwrap();
         analog.set_channel((i % 16) as usize, i as f64);
         analog.report(None).unwrap();
         dial.add_rotation((i % 2) as usize, 0.25);
-        dial.report_changes();
+        dial.report_changes().unwrap();
         text.send_message("status ok", vrpn::TextSeverity::Normal, 0, None)
             .unwrap();
         conn.mainloop().unwrap();

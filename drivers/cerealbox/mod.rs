@@ -221,7 +221,7 @@ impl CerealBoxDriver {
         }
         let _ = self.analog.report_changes(Some(now.wall));
         self.buttons.set_timestamp(now.wall);
-        self.buttons.report_changes_unfiltered();
+        let _ = self.buttons.report_changes_unfiltered();
         self.reset.start(now, port);
     }
 
@@ -332,9 +332,9 @@ impl CerealBoxDriver {
         // A failed send is the connection's business (it reports and drops the peer).
         let _ = self.analog.report_changes(Some(time));
         self.buttons.set_timestamp(time);
-        self.buttons.report_changes_unfiltered();
+        let _ = self.buttons.report_changes_unfiltered();
         self.dials.set_timestamp(time);
-        self.dials.report_changes();
+        let _ = self.dials.report_changes();
     }
 
     fn supervise(&mut self, now: Now, port: &mut PortOps) {

@@ -78,10 +78,13 @@ fn rig(cfg_text: &str, sim: SimConfig, seed: u64) -> Rig {
     let e = events.clone();
     b.on_change(move |c| {
         e.borrow_mut()
-            .push(Event::Button(c.time, c.button, c.state))
+            .push(Event::Button(c.time, c.button as i32, c.state.raw()))
     });
     let e = events.clone();
-    d.on_update(move |u| e.borrow_mut().push(Event::Dial(u.time, u.dial, u.change)));
+    d.on_update(move |u| {
+        e.borrow_mut()
+            .push(Event::Dial(u.time, u.dial as i32, u.change))
+    });
     let texts: Shared<(TextSeverity, String)> = Rc::default();
     let sender = conn.register_sender(&cfg.name).unwrap();
     let text_type = conn.register_type(TEXT_MESSAGE).unwrap();

@@ -86,7 +86,7 @@ impl StationServers {
                 self.buttons.set_button(i, bits & (1 << i) != 0);
             }
             self.buttons.set_timestamp(time);
-            self.buttons.report_changes();
+            let _ = self.buttons.report_changes();
         }
         if let (Some((analog, clips)), Some(joy)) = (&mut self.wand, record.joystick) {
             analog.set_channel(0, clip(joystick_raw(joy[0]), &clips[0]));

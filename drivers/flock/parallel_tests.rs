@@ -136,7 +136,7 @@ impl Rig {
         let poses = self.poses.borrow();
         for i in 0..self.receivers {
             let recs: Vec<&SentRecord> = sent.iter().filter(|r| r.line == i + 1).collect();
-            let got: Vec<&TrackerPose> = poses.iter().filter(|p| p.sensor == i as i32).collect();
+            let got: Vec<&TrackerPose> = poses.iter().filter(|p| p.sensor == i).collect();
             assert!(!got.is_empty(), "nothing from receiver {i}");
             assert!(
                 got.len() <= recs.len() && recs.len() - got.len() <= 1,
@@ -157,7 +157,7 @@ impl Rig {
                 assert_eq!(p.time, self.arrival_wall(rec), "{rec:?}");
             }
         }
-        assert!(poses.iter().all(|p| (p.sensor as usize) < self.receivers));
+        assert!(poses.iter().all(|p| p.sensor < self.receivers));
     }
 }
 

@@ -152,7 +152,7 @@ impl Rig {
     fn assert_pose(&self, pose: &TrackerPose, rec: &SentRecord) {
         let sensor =
             i32::from(rec.address) - i32::from(self.transmitter().first_receiver_address());
-        assert_eq!(pose.sensor, sensor, "sensor of {rec:?}");
+        assert_eq!(pose.sensor as i32, sensor, "sensor of {rec:?}");
         let pos = rec.pose.expected_position_m(self.transmitter());
         assert_eq!(
             [pose.pos.x, pose.pos.y, pose.pos.z],
@@ -588,7 +588,7 @@ fn one_and_thirteen_receivers_at_several_speeds() {
         r.line.run_for(Duration::from_secs(1));
         r.assert_all_arrived();
         let sensors: std::collections::BTreeSet<i32> =
-            r.poses.borrow().iter().map(|p| p.sensor).collect();
+            r.poses.borrow().iter().map(|p| p.sensor as i32).collect();
         assert_eq!(sensors.len(), usize::from(receivers), "{text}");
         assert_eq!(
             r.line.device.flock().configured_units(),
@@ -636,7 +636,7 @@ fn records_cut_anywhere_carry_the_time_of_their_first_read() {
     }
     assert!(ops.is_empty());
     let poses = r.poses.borrow();
-    let times: Vec<(i32, TimeVal)> = poses.iter().map(|p| (p.sensor, p.time)).collect();
+    let times: Vec<(i32, TimeVal)> = poses.iter().map(|p| (p.sensor as i32, p.time)).collect();
     assert_eq!(
         times,
         vec![

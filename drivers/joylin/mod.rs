@@ -180,7 +180,7 @@ impl JoylinDriver {
         // A failed send is the connection's business (it reports and drops the peer).
         let _ = self.analog.report_changes(Some(at.wall));
         self.buttons.set_timestamp(at.wall);
-        self.buttons.report_changes();
+        let _ = self.buttons.report_changes();
     }
 }
 

@@ -51,11 +51,14 @@ fn rig(sim: SimConfig, tweak: impl FnOnce(&mut JoystickSim), seed: u64) -> Rig {
     let (analog, changes): (Shared<Channels>, Shared<Change>) = Default::default();
     let a = analog.clone();
     ar.on_report(move |r| {
-        let n = r.num_channel as usize;
+        let n = r.num_channel;
         a.borrow_mut().push((r.time, r.channel[..n].to_vec()));
     });
     let c = changes.clone();
-    br.on_change(move |ch| c.borrow_mut().push((ch.time, ch.button, ch.state)));
+    br.on_change(move |ch| {
+        c.borrow_mut()
+            .push((ch.time, ch.button as i32, ch.state.raw()))
+    });
     let texts: Shared<(TextSeverity, String)> = Rc::default();
     let sender = conn.register_sender("Joy0").unwrap();
     let text_type = conn.register_type(TEXT_MESSAGE).unwrap();

@@ -310,7 +310,7 @@ impl MagellanDriver {
         // A failed send is the connection's business (it reports and drops the peer).
         let _ = self.analog.report_changes(Some(time));
         self.buttons.set_timestamp(time);
-        self.buttons.report_changes_unfiltered();
+        let _ = self.buttons.report_changes_unfiltered();
     }
 
     fn watchdog(&mut self, now: Now, port: &mut PortOps) {

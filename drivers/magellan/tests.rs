@@ -75,7 +75,7 @@ fn rig(cfg_text: &str, sim: SimConfig, seed: u64) -> Rig {
     let e = events.clone();
     buttons.on_change(move |c| {
         e.borrow_mut()
-            .push(Event::Button(c.time, c.button, c.state))
+            .push(Event::Button(c.time, c.button as i32, c.state.raw()))
     });
     let texts: Shared<(TextSeverity, String)> = Rc::default();
     let sender = conn.register_sender(&cfg.name).unwrap();

@@ -79,6 +79,8 @@ pub enum VrpnStatus {
     Busy = -11,
     /// A bug in the library was caught at the boundary (a Rust panic); the text says where.
     Internal = -12,
+    /// A client was asked to send before its connection is up (nothing was queued).
+    NotConnected = -13,
 }
 
 /// What a connection is doing, as returned by the `*_connection_state` calls.
@@ -133,7 +135,8 @@ impl From<Error> for Failure {
             Error::Resolve { .. } => VrpnStatus::Resolve,
             Error::Io { .. } => VrpnStatus::Io,
             Error::NameLimit(_) | Error::PayloadTooLarge(_) => VrpnStatus::Limit,
-            Error::Log(_) => VrpnStatus::Log,
+            Error::Log(_) | Error::LogNotFound { .. } | Error::LogDamaged(_) => VrpnStatus::Log,
+            Error::NotConnected(_) => VrpnStatus::NotConnected,
             Error::Unsupported(_) => VrpnStatus::Unsupported,
         };
         Failure::new(status, e.to_string())
@@ -233,6 +236,7 @@ pub extern "C" fn vrpn_status_name(status: i32) -> *const c_char {
         -10 => c"LOG",
         -11 => c"BUSY",
         -12 => c"INTERNAL",
+        -13 => c"NOT_CONNECTED",
         _ => c"UNKNOWN",
     };
     name.as_ptr()
@@ -291,6 +295,7 @@ mod tests {
             Log,
             Busy,
             Internal,
+            NotConnected,
         ];
         let mut names = std::collections::HashSet::new();
         for s in all {

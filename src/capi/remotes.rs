@@ -129,7 +129,7 @@ pub extern "C" fn vrpn_button_state(button: *const VrpnButton, index: i32) -> i3
         }
         Ok(b.remote.state(i))
     }) {
-        Ok(s) => s,
+        Ok(s) => s.raw(),
         Err(f) => super::record(f) as i32,
     }
 }
@@ -140,7 +140,7 @@ pub extern "C" fn vrpn_button_state(button: *const VrpnButton, index: i32) -> i3
 pub extern "C" fn vrpn_button_count(button: *const VrpnButton) -> i32 {
     count(handle::with(button, |b| {
         Ok(if b.remote.got_states() {
-            b.remote.num_buttons().max(0) as usize
+            b.remote.num_buttons()
         } else {
             0
         })
@@ -157,13 +157,13 @@ pub extern "C" fn vrpn_button_states(
 ) -> i32 {
     count(handle::with(button, |b| {
         let n = if b.remote.got_states() {
-            (b.remote.num_buttons().max(0) as usize).min(VRPN_BUTTON_MAX_BUTTONS)
+            b.remote.num_buttons().min(VRPN_BUTTON_MAX_BUTTONS)
         } else {
             0
         };
         let mut all = [0i32; VRPN_BUTTON_MAX_BUTTONS];
         for (i, s) in all[..n].iter_mut().enumerate() {
-            *s = b.remote.state(i);
+            *s = b.remote.state(i).raw();
         }
         // SAFETY: `states` has room for `capacity` ints (caller's contract).
         unsafe { copy_out(&all[..n], states, capacity) }
@@ -326,12 +326,11 @@ pub extern "C" fn vrpn_dial_open(name: *const c_char) -> *mut VrpnDial {
         }));
         let t = totals.clone();
         remote.on_update(move |u| {
-            if let Ok(i) = usize::try_from(u.dial) {
-                let mut t = t.borrow_mut();
-                if i < VRPN_DIAL_MAX_DIALS {
-                    t.revolutions[i] += u.change;
-                    t.seen[i] = true;
-                }
+            let i = u.dial;
+            let mut t = t.borrow_mut();
+            if i < VRPN_DIAL_MAX_DIALS {
+                t.revolutions[i] += u.change;
+                t.seen[i] = true;
             }
         });
         Ok(VrpnDial {

@@ -309,7 +309,7 @@ pub extern "C" fn vrpn_button_server_report_changes(
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
         let time = unsafe { time_arg(b.server.connection(), time) };
         b.server.set_timestamp(time);
-        b.server.report_changes();
+        b.server.report_changes()?;
         Ok(VrpnStatus::Ok)
     }))
 }
@@ -494,7 +494,7 @@ pub extern "C" fn vrpn_dial_server_report_changes(
             .map_err(|_| Failure::new(VrpnStatus::Busy, "dial server is busy"))?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
         s.set_timestamp(unsafe { time_arg(&d.conn, time) });
-        s.report_changes();
+        s.report_changes()?;
         Ok(VrpnStatus::Ok)
     }))
 }

@@ -67,7 +67,7 @@ impl From<&TrackerPose> for VrpnTrackerPose {
     fn from(p: &TrackerPose) -> Self {
         VrpnTrackerPose {
             time: p.time.into(),
-            sensor: p.sensor,
+            sensor: p.sensor as i32,
             pos: [p.pos.x, p.pos.y, p.pos.z],
             quat: [p.quat.i, p.quat.j, p.quat.k, p.quat.w],
         }
@@ -94,7 +94,7 @@ impl From<&TrackerVelocity> for VrpnTrackerVelocity {
     fn from(v: &TrackerVelocity) -> Self {
         VrpnTrackerVelocity {
             time: v.time.into(),
-            sensor: v.sensor,
+            sensor: v.sensor as i32,
             vel: [v.vel.x, v.vel.y, v.vel.z],
             vel_quat: [v.vel_quat.i, v.vel_quat.j, v.vel_quat.k, v.vel_quat.w],
             vel_quat_dt: v.vel_quat_dt,
@@ -122,7 +122,7 @@ impl From<&TrackerAcceleration> for VrpnTrackerAcceleration {
     fn from(a: &TrackerAcceleration) -> Self {
         VrpnTrackerAcceleration {
             time: a.time.into(),
-            sensor: a.sensor,
+            sensor: a.sensor as i32,
             acc: [a.acc.x, a.acc.y, a.acc.z],
             acc_quat: [a.acc_quat.i, a.acc_quat.j, a.acc_quat.k, a.acc_quat.w],
             acc_quat_dt: a.acc_quat_dt,
@@ -146,8 +146,8 @@ impl From<&ButtonChange> for VrpnButtonChange {
     fn from(c: &ButtonChange) -> Self {
         VrpnButtonChange {
             time: c.time.into(),
-            button: c.button,
-            state: c.state,
+            button: c.button as i32,
+            state: c.state.raw(),
         }
     }
 }
@@ -168,7 +168,7 @@ impl From<&AnalogReport> for VrpnAnalogReport {
     fn from(r: &AnalogReport) -> Self {
         VrpnAnalogReport {
             time: r.time.into(),
-            num_channel: r.num_channel,
+            num_channel: r.num_channel as i32,
             channel: r.channel,
         }
     }
@@ -190,7 +190,7 @@ impl From<&DialUpdate> for VrpnDialUpdate {
     fn from(u: &DialUpdate) -> Self {
         VrpnDialUpdate {
             time: u.time.into(),
-            dial: u.dial,
+            dial: u.dial as i32,
             change: u.change,
         }
     }

@@ -79,6 +79,8 @@ impl HandlerId {
 type Callback<T> = Rc<RefCell<dyn FnMut(&T)>>;
 
 /// A list of callbacks over values of type `T`, safe to modify and re-enter from a callback.
+/// Internal (the remotes' `on_*` lists), public for remotes built outside the crate.
+#[doc(hidden)]
 pub struct CallbackList<T: ?Sized> {
     entries: RefCell<Vec<(HandlerId, Callback<T>)>>,
 }

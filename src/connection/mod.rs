@@ -18,9 +18,12 @@
 
 pub mod dispatch;
 mod liveness;
+mod logs;
 pub mod names;
+mod open;
 mod printer;
 mod replay_control;
+mod service;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -29,7 +32,7 @@ use std::rc::{Rc, Weak};
 use std::time::{Duration, Instant};
 
 use crate::error::Error;
-use crate::name::{DeviceName, Location};
+use crate::name::DeviceName;
 use crate::net::shell::Shell;
 use crate::net::{PassClock, Reactor};
 use crate::proto::{Delivery, Session};
@@ -38,9 +41,12 @@ use crate::wire;
 use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
 pub(crate) use liveness::Liveness;
+pub use open::ConnectionOptions;
 pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
 pub use replay_control::ReplayControl;
+pub use service::ServiceClass;
 
+pub use crate::proto::clock::{ClockSyncConfig, Estimate};
 pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
 
 /// Largest payload a VRPN peer can receive over TCP (64000-byte buffer less the header).
@@ -81,6 +87,10 @@ struct Inner {
 }
 
 /// A VRPN connection handle. Clones share the connection.
+///
+/// Not `Send`: a connection and every device on it belong to the thread that made them
+/// (sharing by location and `loopback:` are per thread too). To feed another thread, run the
+/// connection on a worker that publishes latest states (docs/USING.md, "Threads").
 #[derive(Clone)]
 pub struct Connection {
     inner: Rc<Inner>,
@@ -170,23 +180,11 @@ impl Connection {
     }
 
     fn open_location_in(name: &DeviceName, reactor: Option<&Reactor>) -> Result<Connection, Error> {
-        match &name.location {
-            Location::Loopback => Ok(Connection::loopback()),
-            Location::File { path } => {
-                Self::shared(&name.location_text, || Connection::replay_file(path))
-            }
-            Location::Net {
-                host,
-                port,
-                tcp_only,
-            } => Self::shared(&name.location_text, || {
-                let reactor = match reactor {
-                    Some(r) => r.clone(),
-                    None => new_reactor()?,
-                };
-                Connection::client_in(&reactor, host, *port, *tcp_only, Limits::default())
-            }),
-        }
+        let options = ConnectionOptions {
+            reactor: reactor.cloned(),
+            ..ConnectionOptions::default()
+        };
+        Self::open_location_with(name, &options)
     }
 
     /// The live connection opened for this location text, or a new one from `make` (C++
@@ -323,14 +321,14 @@ impl Connection {
     ///
     /// `offset` is the peer's clock minus ours in seconds; message times are translated with
     /// it (`local = sender − offset`), and the true offset lies within `± uncertainty`.
-    pub fn clock_estimate(&self) -> Option<crate::proto::clock::Estimate> {
+    pub fn clock_estimate(&self) -> Option<Estimate> {
         let now = self.now();
         self.inner.core.borrow().session.clock_estimate(now)
     }
 
     /// Each connected peer's address and clock estimate (see
     /// [`clock_estimate`](Self::clock_estimate)); a server learns each client's clock this way.
-    pub fn peer_clocks(&self) -> Vec<(String, Option<crate::proto::clock::Estimate>)> {
+    pub fn peer_clocks(&self) -> Vec<(String, Option<Estimate>)> {
         let now = self.now();
         self.inner.core.borrow().session.peer_clocks(now)
     }
@@ -428,8 +426,13 @@ impl Connection {
         self.inner.peer_senders.add(f)
     }
 
-    /// Calls `f` whenever [`state`](Self::state) changes (Connecting → Connected →
-    /// Reconnecting → Connected …, or Listening ↔ Connected for a server).
+    /// Calls `f` whenever [`state`](Self::state) changes, inside `mainloop()`.
+    ///
+    /// A client goes Connecting → Connected; when the server is lost (dropped, closed,
+    /// silent), Connected → Reconnecting at once — that transition *is* the drop — and
+    /// Reconnecting → Connected when it is back. A server goes Listening ↔ Connected as its
+    /// first client arrives and its last leaves. The four raw events
+    /// ([`on_event`](Self::on_event)) are still delivered beside these.
     pub fn on_state_change(&self, f: impl FnMut(&ConnectionState) + 'static) -> HandlerId {
         self.inner.states.add(f)
     }
@@ -438,26 +441,38 @@ impl Connection {
 
     /// Sends a message to every connected peer and to local handlers.
     ///
-    /// `class_of_service` is a mask of [`wire::class`] bits: RELIABLE goes over TCP, anything
-    /// else over UDP once the peer announced a UDP port. A peer that has not completed its
-    /// handshake does not get the message (as in C++); see [`connected`](Self::connected).
-    /// Allocation-free.
+    /// `class_of_service` is a [`ServiceClass`] (or its raw `u32` mask): RELIABLE goes over
+    /// TCP, anything else over UDP once the peer announced a UDP port. Allocation-free.
+    ///
+    /// Before the connection is up nothing is queued (as in C++, a message is sent only to
+    /// peers that completed their handshake), and the result says so: a client that is
+    /// [`Connecting`](ConnectionState::Connecting) or
+    /// [`Reconnecting`](ConnectionState::Reconnecting) returns [`Error::NotConnected`] and
+    /// sends nothing, not even to local handlers. Send requests again once
+    /// [`on_state_change`](Self::on_state_change) reports `Connected`. A server with no
+    /// client is not an error: its reports go to whoever is connected, which may be nobody.
     pub fn pack_message(
         &self,
         time: TimeVal,
         type_id: TypeId,
         sender: SenderId,
         payload: &[u8],
-        class_of_service: u32,
+        class_of_service: impl Into<ServiceClass>,
     ) -> Result<(), Error> {
         if payload.len() > MAX_PAYLOAD {
             return Err(Error::PayloadTooLarge(payload.len()));
         }
         {
             let mut core = self.inner.core.borrow_mut();
-            let overflowed =
-                core.session
-                    .pack(time, sender.0, type_id.0, payload, class_of_service);
+            let state = core.session.state();
+            if matches!(
+                state,
+                ConnectionState::Connecting | ConnectionState::Reconnecting
+            ) {
+                return Err(Error::NotConnected(state));
+            }
+            let class = class_of_service.into().bits();
+            let overflowed = core.session.pack(time, sender.0, type_id.0, payload, class);
             if overflowed {
                 // Rare: a peer is not reading. Only now is the time needed (for the drop).
                 core.session.drop_backlogged(self.inner.clock.now());
@@ -713,60 +728,6 @@ impl Connection {
         });
     }
 
-    // -------------------------------------------------------------- logging
-
-    /// Logs every message this side receives to a new file at `path` (C++ format; an
-    /// existing file is never overwritten). A client logs into one file across reconnects; a
-    /// server opens one file per client, `in.vrpn` → `in-1.vrpn`, `in-2.vrpn`, … (`-li`).
-    pub fn log_incoming(&self, path: &str) -> Result<(), Error> {
-        let mut core = self.inner.core.borrow_mut();
-        if core.shell.server_port().is_some() {
-            let template = path.to_string();
-            core.session.set_incoming_log(
-                None,
-                Some(Box::new(move |n| {
-                    crate::log::open_sink(&compound_log_name(&template, n))
-                        .map_err(|e| e.to_string())
-                })),
-            );
-        } else {
-            let sink = crate::log::open_sink(path).map_err(Error::from_log)?;
-            core.session.set_incoming_log(Some(sink), None);
-        }
-        Ok(())
-    }
-
-    /// Logs every message this side sends (descriptions included) to a new file at `path`
-    /// (`-lo`). A server logs from now on, clients connected or not.
-    pub fn log_outgoing(&self, path: &str) -> Result<(), Error> {
-        let sink = crate::log::open_sink(path).map_err(Error::from_log)?;
-        self.inner.core.borrow_mut().session.set_outgoing_log(sink);
-        Ok(())
-    }
-
-    /// Writes all buffered log data now (`vrpn_server -flush` calls it every pass). Otherwise
-    /// each `mainloop()` writes a bounded amount and the rest goes out when the connection
-    /// closes.
-    pub fn flush_logs(&self) -> Result<(), Error> {
-        self.inner
-            .core
-            .borrow_mut()
-            .session
-            .flush_logs_all()
-            .map_err(Error::Log)
-    }
-
-    /// Ends logging: writes the closing DISCONNECT entry of an outgoing log and flushes.
-    pub fn close_logs(&self) -> Result<(), Error> {
-        let now = self.now();
-        self.inner
-            .core
-            .borrow_mut()
-            .session
-            .close_logs(now)
-            .map_err(Error::Log)
-    }
-
     // -------------------------------------------------------------- waiting
 
     /// When this connection next has time-driven work (a connection attempt, a greeting
@@ -908,13 +869,5 @@ impl Drop for Inner {
     fn drop(&mut self) {
         let core = self.core.get_mut();
         let _ = core.session.close_logs(crate::net::clock());
-    }
-}
-
-/// `in.vrpn` → `in-3.vrpn`: `-N` before the last `.` (appended when there is none), as C++.
-pub(crate) fn compound_log_name(template: &str, n: u32) -> String {
-    match template.rfind('.') {
-        Some(i) => format!("{}-{n}{}", &template[..i], &template[i..]),
-        None => format!("{template}-{n}"),
     }
 }

@@ -8,13 +8,13 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
+use super::latest::Stamp;
 use super::text::TextSeverity;
 use super::{Cadence, ServerDevice};
-use crate::connection::Connection;
-use crate::dispatch::{CallbackList, HandlerId, TypeId};
+use crate::connection::{Connection, ServiceClass};
+use crate::dispatch::{CallbackList, HandlerId, SenderId, TypeId};
 use crate::error::Error;
 use crate::time::{Now, TimeVal};
-use crate::wire::class;
 use crate::wire::payload::analog as codec;
 
 pub use codec::CHANNEL_MAX;
@@ -38,10 +38,17 @@ impl AnalogIds {
 /// A channel report (C++ `vrpn_ANALOGCB`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalogReport {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report, translated to the local clock when clock
+    /// synchronisation is in effect.
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock of the `mainloop()` pass that read it).
+    pub arrival: TimeVal,
+    /// Which report it is: 1 for the first this remote received, then 2, ... (0 before any).
+    pub seq: u64,
     /// Number of channels.
-    pub num_channel: i32,
+    pub num_channel: usize,
     /// Values of channels `0..num_channel`; the rest is zero.
     pub channel: [f64; CHANNEL_MAX],
 }
@@ -49,14 +56,15 @@ pub struct AnalogReport {
 impl AnalogReport {
     /// The values of channels `0..num_channel`.
     pub fn channels(&self) -> &[f64] {
-        &self.channel[..(self.num_channel.clamp(0, CHANNEL_MAX as i32) as usize)]
+        &self.channel[..self.num_channel.min(CHANNEL_MAX)]
     }
 }
 
 struct RemoteShared {
     report: CallbackList<AnalogReport>,
     latest: RefCell<AnalogReport>,
-    got: Cell<bool>,
+    /// The `seq` of the report the application last took.
+    taken: Cell<u64>,
     bad_messages: Cell<u64>,
 }
 
@@ -87,10 +95,13 @@ impl AnalogRemote {
             report: CallbackList::default(),
             latest: RefCell::new(AnalogReport {
                 time: TimeVal::ZERO,
-                num_channel: CHANNEL_MAX as i32,
+                sender_time: TimeVal::ZERO,
+                arrival: TimeVal::ZERO,
+                seq: 0,
+                num_channel: CHANNEL_MAX,
                 channel: [0.0; CHANNEL_MAX],
             }),
-            got: Cell::new(false),
+            taken: Cell::new(0),
             bad_messages: Cell::new(0),
         });
         let s = shared.clone();
@@ -99,8 +110,12 @@ impl AnalogRemote {
                 let mut l = s.latest.borrow_mut();
                 match codec::decode_channels_into(m.payload, &mut l.channel) {
                     Ok(n) => {
-                        l.num_channel = n as i32;
+                        let stamp = Stamp::of(m);
+                        l.num_channel = n;
                         l.time = m.time;
+                        l.sender_time = stamp.sender_time;
+                        l.arrival = stamp.arrival;
+                        l.seq += 1;
                         *l
                     }
                     Err(_) => {
@@ -109,7 +124,6 @@ impl AnalogRemote {
                     }
                 }
             };
-            s.got.set(true);
             s.report.call(&r);
         });
         Ok(AnalogRemote { core, shared })
@@ -125,9 +139,16 @@ impl AnalogRemote {
         self.shared.report.remove(id)
     }
 
-    /// The latest report (128 zero channels before the first one, as C++).
+    /// The latest report (128 zero channels and `seq` 0 before the first one, as C++).
     pub fn latest(&self) -> AnalogReport {
         *self.shared.latest.borrow()
+    }
+
+    /// The latest report if it arrived since the last `take_report()`: a frame loop gets
+    /// each new report once and `None` in frames where none came.
+    pub fn take_report(&self) -> Option<AnalogReport> {
+        let l = self.shared.latest.borrow();
+        (l.seq != self.shared.taken.replace(l.seq)).then_some(*l)
     }
 
     /// Latest value of channel `i` (0.0 before any report or beyond the count).
@@ -138,12 +159,12 @@ impl AnalogRemote {
 
     /// Number of channels in the latest report (128 before the first one, as C++).
     pub fn num_channels(&self) -> usize {
-        self.shared.latest.borrow().num_channel as usize
+        self.shared.latest.borrow().num_channel
     }
 
     /// True once a report arrived.
     pub fn got_report(&self) -> bool {
-        self.shared.got.get()
+        self.shared.latest.borrow().seq > 0
     }
 
     /// Reports that could not be decoded and were ignored.
@@ -161,7 +182,7 @@ pub struct AnalogServer {
     num: usize,
     channels: [f64; CHANNEL_MAX],
     last: [f64; CHANNEL_MAX],
-    class: u32,
+    class: ServiceClass,
 }
 
 impl AnalogServer {
@@ -175,7 +196,7 @@ impl AnalogServer {
             num: channels.min(CHANNEL_MAX),
             channels: [0.0; CHANNEL_MAX],
             last: [0.0; CHANNEL_MAX],
-            class: class::LOW_LATENCY,
+            class: ServiceClass::LOW_LATENCY,
         })
     }
 
@@ -190,8 +211,8 @@ impl AnalogServer {
     }
 
     /// Class of service for reports (LOW_LATENCY by default).
-    pub fn set_class_of_service(&mut self, class_of_service: u32) {
-        self.class = class_of_service;
+    pub fn set_class_of_service(&mut self, class_of_service: impl Into<ServiceClass>) {
+        self.class = class_of_service.into();
     }
 
     /// The current channel values (mutable).
@@ -241,6 +262,11 @@ impl AnalogServer {
     /// The connection this server reports on.
     pub fn connection(&self) -> &Connection {
         &self.conn
+    }
+
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> SenderId {
+        self.base.sender
     }
 }
 

@@ -149,6 +149,11 @@ pub struct AnalogOutputServer {
 }
 
 impl AnalogOutputServer {
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> crate::dispatch::SenderId {
+        self.base.sender
+    }
+
     /// Registers `device` with `channels` output channels (clamped to 128).
     pub fn new(
         device: &str,

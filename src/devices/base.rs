@@ -211,8 +211,10 @@ impl RemoteCore {
         self.handlers.push(h);
     }
 
-    /// Services the connection: every device on it. The first call also starts this
-    /// device's ping cycle (as in C++), which the connection keeps running from then on.
+    /// Services the connection: every device on it. Remotes that share a connection (same
+    /// location text) need this called on only one of them, once per frame. The first call
+    /// also starts this device's ping cycle (as in C++), which the connection keeps running
+    /// from then on.
     pub fn mainloop(&self) -> Result<(), Error> {
         if !self.ping.state.started.replace(true) {
             self.conn.liveness_start();
@@ -256,7 +258,7 @@ impl RemoteCore {
         time: TimeVal,
         type_id: TypeId,
         payload: &[u8],
-        class_of_service: u32,
+        class_of_service: impl Into<crate::connection::ServiceClass>,
     ) -> Result<(), Error> {
         self.conn
             .pack_message(time, type_id, self.base.sender, payload, class_of_service)

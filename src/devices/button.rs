@@ -8,10 +8,11 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
+use super::latest::{Index, Latest, Stamp};
 use super::text::TextSeverity;
 use super::{Cadence, ServerDevice};
 use crate::connection::{Connection, ConnectionEvent};
-use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::dispatch::{CallbackList, HandlerId, SenderFilter, SenderId, TypeId};
 use crate::error::Error;
 use crate::time::{Now, TimeVal};
 use crate::wire::class;
@@ -41,32 +42,88 @@ impl ButtonIds {
     }
 }
 
+/// Whether a button is down. On the wire a state is an integer: 0 is released, anything
+/// else pressed (C++ sends 1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ButtonState {
+    /// Up ([`OFF`]).
+    #[default]
+    Released,
+    /// Down ([`ON`]).
+    Pressed,
+}
+
+impl ButtonState {
+    /// The state of a wire value (nonzero is pressed).
+    pub fn from_raw(raw: i32) -> ButtonState {
+        if raw == OFF {
+            ButtonState::Released
+        } else {
+            ButtonState::Pressed
+        }
+    }
+
+    /// The wire value: [`OFF`] or [`ON`].
+    pub fn raw(self) -> i32 {
+        match self {
+            ButtonState::Released => OFF,
+            ButtonState::Pressed => ON,
+        }
+    }
+
+    /// True for [`Pressed`](Self::Pressed).
+    pub fn is_pressed(self) -> bool {
+        self == ButtonState::Pressed
+    }
+}
+
+impl From<bool> for ButtonState {
+    fn from(pressed: bool) -> Self {
+        if pressed {
+            ButtonState::Pressed
+        } else {
+            ButtonState::Released
+        }
+    }
+}
+
 /// One button changed (C++ `vrpn_BUTTONCB`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ButtonChange {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report, translated to the local clock when clock
+    /// synchronisation is in effect.
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock of the `mainloop()` pass that read it).
+    pub arrival: TimeVal,
+    /// Which change of this button it is: 1 for the first this remote received, then 2, ...
+    pub seq: u64,
     /// Button index.
-    pub button: i32,
-    /// New state: [`OFF`] (0) or [`ON`] (1).
-    pub state: i32,
+    pub button: usize,
+    /// New state.
+    pub state: ButtonState,
 }
 
 /// The state of every button (C++ `vrpn_BUTTONSTATESCB`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ButtonStates {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report (translated as [`ButtonChange::time`]).
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock).
+    pub arrival: TimeVal,
     /// Number of buttons.
-    pub num_buttons: i32,
-    /// States of buttons `0..num_buttons`; the rest is zero.
-    pub states: [i32; MAX_BUTTONS],
+    pub num_buttons: usize,
+    /// States of buttons `0..num_buttons`; the rest is released.
+    pub states: [ButtonState; MAX_BUTTONS],
 }
 
 impl ButtonStates {
     /// The states of buttons `0..num_buttons`.
-    pub fn as_slice(&self) -> &[i32] {
-        &self.states[..(self.num_buttons.clamp(0, MAX_BUTTONS as i32) as usize)]
+    pub fn as_slice(&self) -> &[ButtonState] {
+        &self.states[..self.num_buttons.min(MAX_BUTTONS)]
     }
 }
 
@@ -74,8 +131,12 @@ struct RemoteShared {
     change: CallbackList<ButtonChange>,
     states_cb: CallbackList<ButtonStates>,
     /// Latest state of every button (from Change and States).
-    states: RefCell<[i32; MAX_BUTTONS]>,
-    num_buttons: Cell<i32>,
+    states: RefCell<[ButtonState; MAX_BUTTONS]>,
+    /// The latest change of each button, with its count.
+    changes: Latest<ButtonChange>,
+    /// Presses (changes to pressed) not yet taken, per button.
+    presses: RefCell<[u32; MAX_BUTTONS]>,
+    num_buttons: Cell<usize>,
     got_states: Cell<bool>,
     bad_messages: Cell<u64>,
 }
@@ -107,43 +168,55 @@ impl ButtonRemote {
         let shared = Rc::new(RemoteShared {
             change: CallbackList::default(),
             states_cb: CallbackList::default(),
-            states: RefCell::new([0; MAX_BUTTONS]),
-            num_buttons: Cell::new(MAX_BUTTONS as i32),
+            states: RefCell::new([ButtonState::Released; MAX_BUTTONS]),
+            changes: Latest::with_capacity(MAX_BUTTONS),
+            presses: RefCell::new([0; MAX_BUTTONS]),
+            num_buttons: Cell::new(MAX_BUTTONS),
             got_states: Cell::new(false),
             bad_messages: Cell::new(0),
         });
         let s = shared.clone();
         core.handle(ids.change, move |m| {
             match codec::Change::decode(m.payload) {
-                Ok(c) => {
-                    if let Ok(i) = usize::try_from(c.button) {
-                        if i < MAX_BUTTONS {
-                            s.states.borrow_mut()[i] = c.state;
-                        }
+                Ok(c) if (0..MAX_BUTTONS as i32).contains(&c.button) => {
+                    let (st, button) = (Stamp::of(m), c.button as usize);
+                    let state = ButtonState::from_raw(c.state);
+                    s.states.borrow_mut()[button] = state;
+                    if state == ButtonState::Pressed {
+                        let mut p = s.presses.borrow_mut();
+                        p[button] = p[button].saturating_add(1);
                     }
-                    s.change.call(&ButtonChange {
+                    let change = s.changes.store(button, |seq| ButtonChange {
                         time: m.time,
-                        button: c.button,
-                        state: c.state,
+                        sender_time: st.sender_time,
+                        arrival: st.arrival,
+                        seq,
+                        button,
+                        state,
                     });
+                    s.change.call(&change);
                 }
-                Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
+                _ => s.bad_messages.set(s.bad_messages.get() + 1),
             }
         });
         let s = shared.clone();
         core.handle(ids.states, move |m| {
             match codec::States::decode(m.payload) {
                 Ok(st) => {
-                    s.num_buttons.set(st.count as i32);
+                    s.num_buttons.set(st.count);
                     s.got_states.set(true);
-                    {
-                        let mut cur = s.states.borrow_mut();
-                        cur[..st.count].copy_from_slice(st.as_slice());
+                    let mut states = [ButtonState::Released; MAX_BUTTONS];
+                    for (to, &raw) in states.iter_mut().zip(st.as_slice()) {
+                        *to = ButtonState::from_raw(raw);
                     }
+                    s.states.borrow_mut()[..st.count].copy_from_slice(&states[..st.count]);
+                    let stamp = Stamp::of(m);
                     s.states_cb.call(&ButtonStates {
                         time: m.time,
-                        num_buttons: st.count as i32,
-                        states: st.states,
+                        sender_time: stamp.sender_time,
+                        arrival: stamp.arrival,
+                        num_buttons: st.count,
+                        states,
                     });
                 }
                 Err(_) => s.bad_messages.set(s.bad_messages.get() + 1),
@@ -168,18 +241,43 @@ impl ButtonRemote {
         self.shared.change.remove(id) || self.shared.states_cb.remove(id)
     }
 
-    /// Latest state of button `i` (0 until a report says otherwise).
-    pub fn state(&self, i: usize) -> i32 {
-        self.shared.states.borrow().get(i).copied().unwrap_or(0)
+    /// Latest state of button `i` (released until a report says otherwise).
+    pub fn state(&self, i: usize) -> ButtonState {
+        self.shared
+            .states
+            .borrow()
+            .get(i)
+            .copied()
+            .unwrap_or_default()
     }
 
-    /// True when button `i` is pressed.
+    /// True when button `i` is pressed now.
     pub fn pressed(&self, i: usize) -> bool {
-        self.state(i) != 0
+        self.state(i).is_pressed()
+    }
+
+    /// How many times button `i` went down since the last `take_presses(i)`: a frame loop
+    /// sees a click even when press and release both arrived between two frames.
+    pub fn take_presses(&self, i: usize) -> u32 {
+        self.shared
+            .presses
+            .borrow_mut()
+            .get_mut(i)
+            .map_or(0, std::mem::take)
+    }
+
+    /// The latest change of button `i`, if any arrived.
+    pub fn last_change(&self, i: usize) -> Option<ButtonChange> {
+        self.shared.changes.get(i)
+    }
+
+    /// The latest change of button `i` if it arrived since the last `take_change(i)`.
+    pub fn take_change(&self, i: usize) -> Option<ButtonChange> {
+        self.shared.changes.take(i)
     }
 
     /// Number of buttons: 256 until a States report gives the real count (as C++).
-    pub fn num_buttons(&self) -> i32 {
+    pub fn num_buttons(&self) -> usize {
         self.shared.num_buttons.get()
     }
 
@@ -199,29 +297,34 @@ impl ButtonRemote {
         self.send(self.ids.admin, &buf)
     }
 
-    fn check(&self, button: i32, what: &str) -> Result<(), Error> {
-        if button < 0 || button >= self.num_buttons() {
-            let text = format!(
-                "vrpn_Button::{what}() buttons id {button} is greater than the number of buttons({})",
-                self.num_buttons()
-            );
-            let _ = self.send_text(TextSeverity::Error, 0, &text);
-            return Err(Error::Unsupported(
-                "button index outside the device's count",
-            ));
+    /// The wire's number of `button`, or an error (and a text, as C++) when it is outside
+    /// the device's count.
+    fn check(&self, button: impl Index, what: &str) -> Result<i32, Error> {
+        match button.to_index() {
+            Some(i) if i < self.num_buttons() => Ok(i as i32),
+            i => {
+                let shown = i.map_or("negative".to_string(), |i| i.to_string());
+                let text = format!(
+                    "vrpn_Button::{what}() buttons id {shown} is greater than the number of buttons({})",
+                    self.num_buttons()
+                );
+                let _ = self.send_text(TextSeverity::Error, 0, &text);
+                Err(Error::Unsupported(
+                    "button index outside the device's count",
+                ))
+            }
         }
-        Ok(())
     }
 
     /// Asks the server to make button `i` momentary.
-    pub fn set_momentary(&self, button: i32) -> Result<(), Error> {
-        self.check(button, "set_momentary")?;
+    pub fn set_momentary(&self, button: impl Index) -> Result<(), Error> {
+        let button = self.check(button, "set_momentary")?;
         self.admin(button, MOMENTARY)
     }
 
     /// Asks the server to make button `i` a toggle, initially on (`true`) or off.
-    pub fn set_toggle(&self, button: i32, on: bool) -> Result<(), Error> {
-        self.check(button, "set_toggle")?;
+    pub fn set_toggle(&self, button: impl Index, on: bool) -> Result<(), Error> {
+        let button = self.check(button, "set_toggle")?;
         self.admin(button, if on { TOGGLE_ON } else { TOGGLE_OFF })
     }
 
@@ -252,7 +355,7 @@ struct ServerIds {
     alert: TypeId,
 }
 
-fn send_states(conn: &Connection, ids: &ServerIds, st: &RefCell<ServerState>) {
+fn send_states(conn: &Connection, ids: &ServerIds, st: &RefCell<ServerState>) -> Result<(), Error> {
     let mut buf = [0u8; 4 + 4 * MAX_BUTTONS];
     let (len, time) = {
         let s = st.borrow();
@@ -262,13 +365,13 @@ fn send_states(conn: &Connection, ids: &ServerIds, st: &RefCell<ServerState>) {
         };
         (msg.encode(&mut buf), s.timestamp)
     };
-    let _ = conn.pack_message(
+    conn.pack_message(
         time,
         ids.ids.states,
         ids.base.sender,
         &buf[..len],
         class::RELIABLE,
-    );
+    )
 }
 
 fn send_alert(conn: &Connection, ids: &ServerIds, time: TimeVal, button: i32, event: i32) {
@@ -313,14 +416,14 @@ impl ButtonServer {
         let (weak, st) = (conn.downgrade(), state.clone());
         conn.register_handler(base.ping, SenderFilter::Only(sender), move |_| {
             if let Some(c) = weak.upgrade() {
-                send_states(&c, &ids, &st);
+                let _ = send_states(&c, &ids, &st);
             }
         });
         // States on every new connection.
         let (weak, st) = (conn.downgrade(), state.clone());
         conn.on_event(ConnectionEvent::GotConnection, move || {
             if let Some(c) = weak.upgrade() {
-                send_states(&c, &ids, &st);
+                let _ = send_states(&c, &ids, &st);
             }
         });
         // Admin from any sender, as C++.
@@ -359,8 +462,8 @@ impl ButtonServer {
     }
 
     /// The physical state of button `i`.
-    pub fn button(&self, i: usize) -> i32 {
-        self.state.borrow().buttons.get(i).copied().unwrap_or(0)
+    pub fn button(&self, i: usize) -> ButtonState {
+        ButtonState::from_raw(self.state.borrow().buttons.get(i).copied().unwrap_or(0))
     }
 
     /// The mode of button `i` ([`MOMENTARY`], [`TOGGLE_OFF`] or [`TOGGLE_ON`]).
@@ -394,18 +497,21 @@ impl ButtonServer {
     }
 
     /// Sends one Change per changed button (toggle semantics per mode), in index order.
-    pub fn report_changes(&self) {
-        self.send_changes(true);
+    ///
+    /// Never fails on a server; an error is what the connection refused (see
+    /// [`Connection::pack_message`]).
+    pub fn report_changes(&self) -> Result<(), Error> {
+        self.send_changes(true)
     }
 
     /// Sends one Change per button whose physical state changed, in index order, ignoring
     /// toggle modes: what C++ drivers that call the plain `vrpn_Button::report_changes` send
     /// (the Magellan and the CerealBox), although clients may still set modes.
-    pub fn report_changes_unfiltered(&self) {
-        self.send_changes(false);
+    pub fn report_changes_unfiltered(&self) -> Result<(), Error> {
+        self.send_changes(false)
     }
 
-    fn send_changes(&self, filtered: bool) {
+    fn send_changes(&self, filtered: bool) -> Result<(), Error> {
         // (button, state, alert event or 0); built first so no borrow is held while sending.
         let mut out = [(0i32, 0i32, 0i32); MAX_BUTTONS];
         let mut n = 0;
@@ -442,19 +548,25 @@ impl ButtonServer {
             }
             let mut buf = [0u8; codec::Change::LEN];
             codec::Change { button, state }.encode(&mut buf);
-            let _ = self.conn.pack_message(
+            self.conn.pack_message(
                 time,
                 self.ids.ids.change,
                 self.ids.base.sender,
                 &buf,
                 class::RELIABLE,
-            );
+            )?;
         }
+        Ok(())
     }
 
     /// Sends the States message now.
-    pub fn report_states(&self) {
-        send_states(&self.conn, &self.ids, &self.state);
+    pub fn report_states(&self) -> Result<(), Error> {
+        send_states(&self.conn, &self.ids, &self.state)
+    }
+
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> SenderId {
+        self.ids.base.sender
     }
 
     /// Sends a text message from this device.
@@ -578,7 +690,7 @@ impl ButtonExample {
                 s.buttons[i] = i32::from(s.last[i] == 0);
             }
         }
-        self.server.report_changes();
+        let _ = self.server.report_changes();
     }
 }
 

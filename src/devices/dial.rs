@@ -7,10 +7,11 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
+use super::latest::{Latest, Stamp};
 use super::text::TextSeverity;
 use super::{Cadence, ServerDevice};
 use crate::connection::Connection;
-use crate::dispatch::{CallbackList, HandlerId, TypeId};
+use crate::dispatch::{CallbackList, HandlerId, SenderId, TypeId};
 use crate::error::Error;
 use crate::time::{Now, TimeVal};
 use crate::wire::class;
@@ -37,17 +38,31 @@ impl DialIds {
 /// One dial moved (C++ `vrpn_DIALCB`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DialUpdate {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report, translated to the local clock when clock
+    /// synchronisation is in effect.
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock of the `mainloop()` pass that read it).
+    pub arrival: TimeVal,
+    /// Which update of this dial it is: 1 for the first this remote received, then 2, ...
+    pub seq: u64,
     /// Dial index.
-    pub dial: i32,
+    pub dial: usize,
     /// Revolutions since the previous report.
     pub change: f64,
 }
 
-#[derive(Default)]
+/// What a remote keeps of a dial: its last update and the rotation not yet taken.
+#[derive(Clone, Copy)]
+struct DialState {
+    last: DialUpdate,
+    untaken: f64,
+}
+
 struct RemoteShared {
     update: CallbackList<DialUpdate>,
+    dials: Latest<DialState>,
     bad: std::cell::Cell<u64>,
 }
 
@@ -74,16 +89,31 @@ impl DialRemote {
     /// A remote for `device` on an existing connection.
     pub fn on_connection(device: &str, conn: &Connection) -> Result<DialRemote, Error> {
         let (mut core, ids) = RemoteCore::new(device, conn, DialIds::register)?;
-        let shared = Rc::new(RemoteShared::default());
+        let shared = Rc::new(RemoteShared {
+            update: CallbackList::default(),
+            dials: Latest::with_capacity(8),
+            bad: std::cell::Cell::new(0),
+        });
         let s = shared.clone();
         core.handle(ids.update, move |m| {
             match codec::Update::decode(m.payload) {
-                Ok(u) => s.update.call(&DialUpdate {
-                    time: m.time,
-                    dial: u.dial,
-                    change: u.change,
-                }),
-                Err(_) => s.bad.set(s.bad.get() + 1),
+                Ok(u) if u.dial >= 0 => {
+                    let (st, dial) = (Stamp::of(m), u.dial as usize);
+                    let untaken = s.dials.get(dial).map_or(0.0, |d| d.untaken);
+                    let state = s.dials.store(dial, |seq| DialState {
+                        last: DialUpdate {
+                            time: m.time,
+                            sender_time: st.sender_time,
+                            arrival: st.arrival,
+                            seq,
+                            dial,
+                            change: u.change,
+                        },
+                        untaken: untaken + u.change,
+                    });
+                    s.update.call(&state.last);
+                }
+                _ => s.bad.set(s.bad.get() + 1),
             }
         });
         Ok(DialRemote { core, shared })
@@ -97,6 +127,20 @@ impl DialRemote {
     /// Removes a callback.
     pub fn remove_callback(&self, id: HandlerId) -> bool {
         self.shared.update.remove(id)
+    }
+
+    /// The last update of `dial`, if any arrived.
+    pub fn last_update(&self, dial: usize) -> Option<DialUpdate> {
+        self.shared.dials.get(dial).map(|d| d.last)
+    }
+
+    /// Revolutions `dial` turned since the last `take_rotation(dial)` (the sum of the
+    /// updates in between; 0.0 when none came): what a frame loop applies once per frame.
+    pub fn take_rotation(&self, dial: usize) -> f64 {
+        self.shared.dials.take(dial).map_or(0.0, |d| {
+            self.shared.dials.store_quiet(dial, |s| s.untaken = 0.0);
+            d.untaken
+        })
     }
 
     /// Updates that could not be decoded and were ignored.
@@ -153,37 +197,49 @@ impl DialServer {
         }
     }
 
-    fn send(&mut self, i: usize) {
+    fn send(&mut self, i: usize) -> Result<(), Error> {
         let mut buf = [0u8; codec::Update::LEN];
         codec::Update {
             change: self.dials[i],
             dial: i as i32,
         }
         .encode(&mut buf);
-        let _ = self.conn.pack_message(
+        self.dials[i] = 0.0;
+        self.conn.pack_message(
             self.timestamp,
             self.ids.update,
             self.base.sender,
             &buf,
             class::RELIABLE,
-        );
-        self.dials[i] = 0.0;
+        )
     }
 
     /// Sends one update per dial with nonzero rotation, then zeroes them.
-    pub fn report_changes(&mut self) {
+    pub fn report_changes(&mut self) -> Result<(), Error> {
         for i in 0..self.num {
             if self.dials[i] != 0.0 {
-                self.send(i);
+                self.send(i)?;
             }
         }
+        Ok(())
     }
 
     /// Sends one update per dial, zeros included, then zeroes them.
-    pub fn report(&mut self) {
+    pub fn report(&mut self) -> Result<(), Error> {
         for i in 0..self.num {
-            self.send(i);
+            self.send(i)?;
         }
+        Ok(())
+    }
+
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> SenderId {
+        self.base.sender
+    }
+
+    /// The connection this server reports on.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
     }
 
     /// Sends a text message from this device.
@@ -233,7 +289,7 @@ impl ServerDevice for DialExample {
         for i in 0..self.server.num_dials() {
             self.server.set_dial(i, self.step);
         }
-        self.server.report_changes();
+        let _ = self.server.report_changes();
     }
 
     fn next_deadline(&self) -> Option<Instant> {

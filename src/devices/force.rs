@@ -537,7 +537,7 @@ struct ServerShared {
     plane2: CallbackList<(TimeVal, Plane2)>,
     field: CallbackList<(TimeVal, ForceField)>,
     request: CallbackList<ForceRequestMsg>,
-    effects: RefCell<Vec<EffectCallback>>,
+    effects: RefCell<Vec<(HandlerId, EffectCallback)>>,
     bad_messages: Cell<u64>,
 }
 
@@ -546,7 +546,7 @@ impl ServerShared {
         let mut i = 0;
         loop {
             let cb = match self.effects.borrow().get(i) {
-                Some(cb) => cb.clone(),
+                Some((_, cb)) => cb.clone(),
                 None => break,
             };
             if let Ok(mut f) = cb.try_borrow_mut() {
@@ -567,6 +567,11 @@ pub struct ForceDeviceServer {
 }
 
 impl ForceDeviceServer {
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> crate::dispatch::SenderId {
+        self.base.sender
+    }
+
     /// Registers `device` on a server (or loopback) connection.
     pub fn new(device: &str, conn: &Connection) -> Result<ForceDeviceServer, Error> {
         let (base, ids) = base::register_server(conn, device, ForceIds::register)?;
@@ -643,18 +648,34 @@ impl ForceDeviceServer {
         self.shared.request.add(f)
     }
 
-    /// Removes a callback `on_plane`, `on_plane2`, `on_force_field` or `on_request` returned.
+    /// Removes a callback `on_plane`, `on_plane2`, `on_force_field`, `on_request` or
+    /// `on_custom_effect` returned.
     pub fn remove_callback(&self, id: HandlerId) -> bool {
         let s = &self.shared;
-        s.plane.remove(id) || s.plane2.remove(id) || s.field.remove(id) || s.request.remove(id)
+        let effect = || {
+            let mut e = s.effects.borrow_mut();
+            let before = e.len();
+            e.retain(|(i, _)| *i != id);
+            e.len() != before
+        };
+        s.plane.remove(id)
+            || s.plane2.remove(id)
+            || s.field.remove(id)
+            || s.request.remove(id)
+            || effect()
     }
 
     /// Calls `f` for every custom effect a client sends (including stops).
-    pub fn on_custom_effect(&self, f: impl for<'a> FnMut(&CustomEffectMsg<'a>) + 'static) {
+    pub fn on_custom_effect(
+        &self,
+        f: impl for<'a> FnMut(&CustomEffectMsg<'a>) + 'static,
+    ) -> HandlerId {
+        let id = HandlerId::fresh();
         self.shared
             .effects
             .borrow_mut()
-            .push(Rc::new(RefCell::new(f)));
+            .push((id, Rc::new(RefCell::new(f))));
+        id
     }
 
     /// Requests and effects that could not be decoded and were ignored.
@@ -675,7 +696,7 @@ impl ForceDeviceServer {
         )
     }
 
-    /// Sends a surface contact point (LOW_LATENCY).
+    /// Sends a surface contact point (LOW_LATENCY); `quat` in (x, y, z, w) order.
     pub fn report_scp(&self, time: TimeVal, pos: [f64; 3], quat: [f64; 4]) -> Result<(), Error> {
         let mut buf = [0u8; codec::Scp::LEN];
         codec::Scp { pos, quat }.encode(&mut buf);

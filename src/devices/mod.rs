@@ -8,13 +8,29 @@ use crate::time::Now;
 pub mod analog;
 pub mod analog_output;
 pub mod base;
+pub mod builder;
 pub mod button;
 pub mod dial;
 pub mod force;
+pub mod latest;
 pub mod poser;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
+
+pub use builder::{Remote, RemoteBuilder};
+pub use latest::Index;
+
+builder::remote_builder!(
+    tracker::TrackerRemote,
+    button::ButtonRemote,
+    analog::AnalogRemote,
+    dial::DialRemote,
+    analog_output::AnalogOutputRemote,
+    poser::PoserRemote,
+    force::ForceDeviceRemote,
+    text_device::TextReceiver,
+);
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest
 /// deadline any device asks for (or until a socket is ready).

@@ -1,5 +1,6 @@
 //! Poser: the client requests poses and velocities; the server clamps, stores
 //! and calls back. Quirks of the C++ remote and server are kept for wire compatibility.
+//! Every quaternion here is `[f64; 4]` in VRPN's (x, y, z, w) order.
 
 use std::cell::RefCell;
 use std::ops::Deref;
@@ -179,11 +180,11 @@ pub struct PoserState {
     pub time: TimeVal,
     /// Position (clamped to the workspace).
     pub pos: [f64; 3],
-    /// Orientation.
+    /// Orientation (x, y, z, w).
     pub quat: [f64; 4],
     /// Velocity (clamped to [-1, 1]).
     pub vel: [f64; 3],
-    /// Velocity rotation.
+    /// Velocity rotation (x, y, z, w).
     pub vel_quat: [f64; 4],
     /// Velocity rotation interval.
     pub vel_quat_dt: f64,
@@ -204,9 +205,15 @@ fn clamp3(v: &mut [f64; 3], lo: f64, hi: f64) {
 /// Server half (C++ `vrpn_Poser_Server`): position clamped to [-1, 1] on every axis.
 pub struct PoserServer {
     shared: Rc<ServerShared>,
+    sender: crate::dispatch::SenderId,
 }
 
 impl PoserServer {
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> crate::dispatch::SenderId {
+        self.sender
+    }
+
     /// Registers `device` on a server (or loopback) connection.
     pub fn new(device: &str, conn: &Connection) -> Result<PoserServer, Error> {
         let (base, ids) = base::register_server(conn, device, PoserIds::register)?;
@@ -289,7 +296,7 @@ impl PoserServer {
             st.vel_quat_dt += r.vel_quat_dt;
             clamp3(&mut st.vel, -1.0, 1.0);
         });
-        Ok(PoserServer { shared })
+        Ok(PoserServer { shared, sender })
     }
 
     /// Calls `f` with the clamped pose after each absolute pose request.

@@ -117,6 +117,11 @@ pub struct TextSender {
 }
 
 impl TextSender {
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> crate::dispatch::SenderId {
+        self.base.sender
+    }
+
     /// Registers `device` on a server (or loopback) connection and answers its pings.
     pub fn new(device: &str, conn: &Connection) -> Result<TextSender, Error> {
         let (base, ()) = base::register_server(conn, device, |_| Ok(()))?;

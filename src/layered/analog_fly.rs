@@ -171,9 +171,9 @@ impl TrackerAnalogFly {
         let reset_button = match &cfg.reset {
             Some(b) => {
                 let source = ButtonSource::open(&b.device, conn)?;
-                let (s, index) = (state.clone(), b.button as i32);
+                let (s, index) = (state.clone(), b.button as usize);
                 source.remote.on_change(move |c| {
-                    if c.button == index && c.state == 1 {
+                    if c.button == index && c.state.is_pressed() {
                         s.borrow_mut().reset();
                     }
                 });
@@ -184,10 +184,10 @@ impl TrackerAnalogFly {
         let clutch_button = match &cfg.clutch {
             Some(b) => {
                 let source = ButtonSource::open(&b.device, conn)?;
-                let (s, index) = (state.clone(), b.button as i32);
+                let (s, index) = (state.clone(), b.button as usize);
                 source.remote.on_change(move |c| {
                     if c.button == index {
-                        s.borrow_mut().clutch_engaged = c.state == 1;
+                        s.borrow_mut().clutch_engaged = c.state.is_pressed();
                     }
                 });
                 Some(source)

@@ -155,14 +155,14 @@ impl TrackerButtonFly {
         let mut buttons = Vec::with_capacity(cfg.axes.len());
         for (i, a) in cfg.axes.iter().enumerate() {
             let source = ButtonSource::open(&a.button.device, conn)?;
-            let (s, index) = (state.clone(), a.button.button as i32);
+            let (s, index) = (state.clone(), a.button.button as usize);
             source.remote.on_change(move |c| {
                 if c.button != index {
                     return;
                 }
                 let mut st = s.borrow_mut();
                 if st.axes[i].absolute {
-                    if c.state == 1 {
+                    if c.state.is_pressed() {
                         let (v, r) = (st.axes[i].vec, st.axes[i].rot);
                         let mut m = euler_col_matrix(
                             r[2] as f64 * TWO_PI,
@@ -177,7 +177,7 @@ impl TrackerButtonFly {
                         st.axes[i].active = true;
                     }
                 } else {
-                    st.axes[i].active = c.state != 0;
+                    st.axes[i].active = c.state.is_pressed();
                 }
             });
             buttons.push(source);

@@ -22,6 +22,8 @@
 //! # Ok::<(), vrpn::log::LogError>(())
 //! ```
 
+// The entry codec; what a user needs of it is re-exported here.
+#[doc(hidden)]
 pub mod format;
 pub mod names;
 pub mod reader;

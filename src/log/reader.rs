@@ -65,6 +65,7 @@ pub fn check_log_cookie(file: &[u8]) -> Result<Cookie, CookieProblem> {
 /// Every variant names the file and, where it applies, the byte offset; `Display` gives
 /// `PATH: byte OFFSET: problem`.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum LogError {
     /// An operating-system error while opening, reading or writing the file.
     Io {

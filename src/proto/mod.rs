@@ -38,7 +38,8 @@ pub enum ConnectionState {
     /// Client: connected to the server. Server: at least one peer connected. Loopback and
     /// replay: always.
     Connected,
-    /// Client: was connected, lost the server, and keeps trying.
+    /// Client: was connected, lost the server (the change to this state is the drop), and
+    /// keeps trying.
     Reconnecting,
     /// Server: listening, no peer connected.
     Listening,
@@ -91,7 +92,7 @@ pub struct Notice {
 }
 
 /// Limits and timings of a connection. The defaults suit a lab network.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
     /// Reliable output that may wait for one peer before the peer is dropped as not reading.
     pub max_pending_output: usize,

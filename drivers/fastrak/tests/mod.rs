@@ -80,7 +80,7 @@ fn rig_with(
         let s = seen.clone();
         b.on_change(move |c| {
             s.borrow_mut()
-                .push(Seen::Button(dev, c.button, c.state, c.time))
+                .push(Seen::Button(dev, c.button as i32, c.state.raw(), c.time))
         });
         buttons.push(b);
         let a = AnalogRemote::on_connection(dev, &conn).unwrap();
@@ -217,7 +217,12 @@ fn expected_pose(r: &SentRecord, time: TimeVal) -> (i32, [f64; 3], [f64; 4], Tim
 }
 
 fn actual(p: &TrackerPose) -> (i32, [f64; 3], [f64; 4], TimeVal) {
-    (p.sensor, [p.pos.x, p.pos.y, p.pos.z], xyzw(p), p.time)
+    (
+        p.sensor as i32,
+        [p.pos.x, p.pos.y, p.pos.z],
+        xyzw(p),
+        p.time,
+    )
 }
 
 /// Finds each pose, in order, among the records of `log`, each stamped with its first
@@ -329,7 +334,12 @@ fn streamed_values_arrive_exactly_and_in_order() {
     let n = assert_exact_stream(&rig);
     // 60 cycles a second of four stations.
     assert!(n > 3 * 60 * 4 - 8, "{n} poses");
-    let sensors: Vec<i32> = rig.poses().iter().take(8).map(|p| p.sensor).collect();
+    let sensors: Vec<i32> = rig
+        .poses()
+        .iter()
+        .take(8)
+        .map(|p| p.sensor as i32)
+        .collect();
     assert_eq!(sensors, [0, 1, 2, 3, 0, 1, 2, 3]);
     assert_eq!(rig.line.driver.skipped_bytes(), 0);
     assert_eq!(rig.line.driver.records() as usize, n);

@@ -204,7 +204,7 @@ fn intersense_entry_runs_eight_stations_over_the_fastrak_protocol() {
         let t = TimeVal::from_micros(zero.as_micros() + is900_offset(r.device_ms).as_micros());
         assert_eq!(actual(p), expected_pose(r, t));
     }
-    let sensors: std::collections::BTreeSet<i32> = poses.iter().map(|p| p.sensor).collect();
+    let sensors: std::collections::BTreeSet<i32> = poses.iter().map(|p| p.sensor as i32).collect();
     assert_eq!(sensors.len(), 8);
     let clips = [
         WandClip {

@@ -1,14 +1,19 @@
-//! Tracker: poses (position + unit quaternion), velocities and accelerations per sensor
-//!. [`TrackerRemote`] is the client half; [`TrackerServer`] the server half any
+//! Tracker: poses (position + unit quaternion), velocities and accelerations per sensor.
+//! [`TrackerRemote`] is the client half; [`TrackerServer`] the server half any
 //! driver reports through; [`TrackerNull`] the `vrpn_Tracker_NULL` test device.
+//!
+//! Quaternions: the reports carry nalgebra's [`UnitQuaternion`]; wherever a quaternion is a
+//! plain `[f64; 4]` (the server's `report_pose`, the transforms, the wire), its order is
+//! **x, y, z, w** (vector part first, scalar last), as in C++ VRPN.
 
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 use std::ops::Deref;
 use std::rc::Rc;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::base::RemoteCore;
+use super::latest::{Latest, Stamp};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId, TypeId};
 use crate::error::Error;
@@ -21,6 +26,7 @@ mod server;
 pub use examples::{TrackerNull, TrackerSpin};
 pub use server::{TrackerServer, TrackerTransforms};
 
+pub use super::latest::MAX_LATEST_INDEX;
 pub use codec::{
     ACCELERATION, POS_QUAT, RESET_ORIGIN, SET_UPDATE_RATE, TO_ROOM, TYPE_NAMES, UNIT_TO_SENSOR,
     VELOCITY, WORKSPACE,
@@ -109,23 +115,39 @@ fn rotation_rate(q: &UnitQuaternion<f64>, dt: f64) -> Vector3<f64> {
 /// A pose report (C++ `vrpn_TRACKERCB`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackerPose {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report, translated to the local clock when clock
+    /// synchronisation with the server is in effect (otherwise as stamped).
     pub time: TimeVal,
+    /// The time exactly as the server stamped it (its own clock).
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock of the `mainloop()` pass that read it).
+    pub arrival: TimeVal,
+    /// Which pose of this sensor it is: 1 for the first this remote received, then 2, ...
+    /// (0 for a sensor index at or beyond [`MAX_LATEST_INDEX`], whose state is not kept).
+    /// A frame loop that sees the same `seq` twice saw no new report.
+    pub seq: u64,
     /// Sensor index.
-    pub sensor: i32,
+    pub sensor: usize,
     /// Position in metres, tracker frame.
     pub pos: Vector3<f64>,
-    /// Orientation: rotates tracker axes onto sensor axes.
+    /// Orientation: rotates tracker axes onto sensor axes. As an array:
+    /// `[quat.i, quat.j, quat.k, quat.w]` is VRPN's (x, y, z, w) order.
     pub quat: UnitQuaternion<f64>,
 }
 
 /// A velocity report (C++ `vrpn_TRACKERVELCB`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackerVelocity {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report (translated as [`TrackerPose::time`]).
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock).
+    pub arrival: TimeVal,
+    /// Which velocity report of this sensor it is (1, 2, ...; see [`TrackerPose::seq`]).
+    pub seq: u64,
     /// Sensor index.
-    pub sensor: i32,
+    pub sensor: usize,
     /// Linear velocity, m/s.
     pub vel: Vector3<f64>,
     /// Rotation the sensor undergoes during `vel_quat_dt` seconds.
@@ -144,10 +166,16 @@ impl TrackerVelocity {
 /// An acceleration report (C++ `vrpn_TRACKERACCCB`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackerAcceleration {
-    /// Time the server stamped on the report.
+    /// Time the server stamped on the report (translated as [`TrackerPose::time`]).
     pub time: TimeVal,
+    /// The time exactly as the server stamped it.
+    pub sender_time: TimeVal,
+    /// When it arrived here (local wall clock).
+    pub arrival: TimeVal,
+    /// Which acceleration report of this sensor it is (1, 2, ...; see [`TrackerPose::seq`]).
+    pub seq: u64,
     /// Sensor index.
-    pub sensor: i32,
+    pub sensor: usize,
     /// Linear acceleration, m/s².
     pub acc: Vector3<f64>,
     /// Change of the velocity rotation over `acc_quat_dt` seconds.
@@ -181,7 +209,7 @@ pub struct TrackerUnitToSensor {
     /// Time of the reply.
     pub time: TimeVal,
     /// Sensor index.
-    pub sensor: i32,
+    pub sensor: usize,
     /// Translation.
     pub pos: Vector3<f64>,
     /// Rotation.
@@ -199,7 +227,6 @@ pub struct TrackerWorkspace {
     pub max: Vector3<f64>,
 }
 
-#[derive(Default)]
 struct RemoteShared {
     pose: CallbackList<TrackerPose>,
     velocity: CallbackList<TrackerVelocity>,
@@ -207,25 +234,35 @@ struct RemoteShared {
     to_room: CallbackList<TrackerToRoom>,
     unit_to_sensor: CallbackList<TrackerUnitToSensor>,
     workspace: CallbackList<TrackerWorkspace>,
-    latest_pose: RefCell<Vec<Option<TrackerPose>>>,
-    latest_velocity: RefCell<Vec<Option<TrackerVelocity>>>,
-    latest_acceleration: RefCell<Vec<Option<TrackerAcceleration>>>,
+    latest_pose: Latest<TrackerPose>,
+    latest_velocity: Latest<TrackerVelocity>,
+    latest_acceleration: Latest<TrackerAcceleration>,
     bad_messages: Cell<u64>,
 }
 
-fn store<T: Copy>(slots: &RefCell<Vec<Option<T>>>, sensor: i32, value: T) {
-    let Ok(i) = usize::try_from(sensor) else {
-        return;
-    };
-    let mut s = slots.borrow_mut();
-    if s.len() <= i {
-        // Grows once per new sensor index, never per report.
-        s.resize(i + 1, None);
+impl Default for RemoteShared {
+    fn default() -> Self {
+        RemoteShared {
+            pose: CallbackList::default(),
+            velocity: CallbackList::default(),
+            acceleration: CallbackList::default(),
+            to_room: CallbackList::default(),
+            unit_to_sensor: CallbackList::default(),
+            workspace: CallbackList::default(),
+            latest_pose: Latest::with_capacity(16),
+            latest_velocity: Latest::with_capacity(0),
+            latest_acceleration: Latest::with_capacity(0),
+            bad_messages: Cell::new(0),
+        }
     }
-    s[i] = Some(value);
 }
 
 /// Client half of a tracker: callbacks and the latest state of every sensor.
+///
+/// Two ways to read it, which may be mixed: callbacks ([`on_pose`](Self::on_pose), ...) run
+/// for every report inside `mainloop()`; the latest state ([`pose`](Self::pose),
+/// [`take_pose`](Self::take_pose), ...) is what a frame loop reads once per frame, with
+/// `seq` and `take_*` saying whether a report is new since the last frame.
 ///
 /// ```no_run
 /// let tracker = vrpn::TrackerRemote::new("Tracker0@localhost")?;
@@ -260,19 +297,21 @@ impl TrackerRemote {
     pub fn on_connection(device: &str, conn: &Connection) -> Result<TrackerRemote, Error> {
         let (mut core, ids) = RemoteCore::new(device, conn, TrackerIds::register)?;
         let shared = Rc::new(RemoteShared::default());
-        shared.latest_pose.borrow_mut().reserve(16);
 
         let s = shared.clone();
         core.handle(ids.pos_quat, move |m| {
             match codec::PosQuat::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
-                    let p = TrackerPose {
+                    let (st, sensor) = (Stamp::of(m), r.sensor as usize);
+                    let p = s.latest_pose.store(sensor, |seq| TrackerPose {
                         time: m.time,
-                        sensor: r.sensor,
+                        sender_time: st.sender_time,
+                        arrival: st.arrival,
+                        seq,
+                        sensor,
                         pos: Vector3::from(r.pos),
                         quat: quat_from_xyzw(r.quat),
-                    };
-                    store(&s.latest_pose, p.sensor, p);
+                    });
                     s.pose.call(&p);
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
@@ -282,14 +321,17 @@ impl TrackerRemote {
         core.handle(ids.velocity, move |m| {
             match codec::Velocity::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
-                    let v = TrackerVelocity {
+                    let (st, sensor) = (Stamp::of(m), r.sensor as usize);
+                    let v = s.latest_velocity.store(sensor, |seq| TrackerVelocity {
                         time: m.time,
-                        sensor: r.sensor,
+                        sender_time: st.sender_time,
+                        arrival: st.arrival,
+                        seq,
+                        sensor,
                         vel: Vector3::from(r.vel),
                         vel_quat: quat_from_xyzw(r.vel_quat),
                         vel_quat_dt: r.vel_quat_dt,
-                    };
-                    store(&s.latest_velocity, v.sensor, v);
+                    });
                     s.velocity.call(&v);
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
@@ -300,14 +342,19 @@ impl TrackerRemote {
             ids.acceleration,
             move |m| match codec::Acceleration::decode(m.payload) {
                 Ok(r) if r.sensor >= 0 => {
-                    let a = TrackerAcceleration {
-                        time: m.time,
-                        sensor: r.sensor,
-                        acc: Vector3::from(r.acc),
-                        acc_quat: quat_from_xyzw(r.acc_quat),
-                        acc_quat_dt: r.acc_quat_dt,
-                    };
-                    store(&s.latest_acceleration, a.sensor, a);
+                    let (st, sensor) = (Stamp::of(m), r.sensor as usize);
+                    let a = s
+                        .latest_acceleration
+                        .store(sensor, |seq| TrackerAcceleration {
+                            time: m.time,
+                            sender_time: st.sender_time,
+                            arrival: st.arrival,
+                            seq,
+                            sensor,
+                            acc: Vector3::from(r.acc),
+                            acc_quat: quat_from_xyzw(r.acc_quat),
+                            acc_quat_dt: r.acc_quat_dt,
+                        });
                     s.acceleration.call(&a);
                 }
                 _ => s.bad_messages.set(s.bad_messages.get() + 1),
@@ -324,16 +371,18 @@ impl TrackerRemote {
             }
         });
         let s = shared.clone();
-        core.handle(ids.unit_to_sensor, move |m| {
-            if let Ok(r) = codec::UnitToSensor::decode(m.payload) {
-                s.unit_to_sensor.call(&TrackerUnitToSensor {
+        core.handle(
+            ids.unit_to_sensor,
+            move |m| match codec::UnitToSensor::decode(m.payload) {
+                Ok(r) if r.sensor >= 0 => s.unit_to_sensor.call(&TrackerUnitToSensor {
                     time: m.time,
-                    sensor: r.sensor,
+                    sensor: r.sensor as usize,
                     pos: Vector3::from(r.pos),
                     quat: quat_from_xyzw(r.quat),
-                });
-            }
-        });
+                }),
+                _ => s.bad_messages.set(s.bad_messages.get() + 1),
+            },
+        );
         let s = shared.clone();
         core.handle(ids.workspace, move |m| {
             if let Ok(r) = codec::Workspace::decode(m.payload) {
@@ -355,7 +404,7 @@ impl TrackerRemote {
     /// Calls `f` for pose reports of one sensor.
     pub fn on_sensor_pose(
         &self,
-        sensor: i32,
+        sensor: usize,
         mut f: impl FnMut(&TrackerPose) + 'static,
     ) -> HandlerId {
         self.shared.pose.add(move |p| {
@@ -402,39 +451,46 @@ impl TrackerRemote {
             || s.workspace.remove(id)
     }
 
-    /// The latest pose of `sensor`, if one arrived.
+    /// The latest pose of `sensor`, if one arrived (whether or not it was read before).
     pub fn pose(&self, sensor: usize) -> Option<TrackerPose> {
-        self.shared
-            .latest_pose
-            .borrow()
-            .get(sensor)
-            .copied()
-            .flatten()
+        self.shared.latest_pose.get(sensor)
+    }
+
+    /// The latest pose of `sensor` if it arrived since the last `take_pose(sensor)`: a frame
+    /// loop that calls it once per frame gets each new pose once and `None` in frames
+    /// where none came (then [`pose`](Self::pose) still has the last one).
+    pub fn take_pose(&self, sensor: usize) -> Option<TrackerPose> {
+        self.shared.latest_pose.take(sensor)
     }
 
     /// The latest velocity of `sensor`.
     pub fn velocity(&self, sensor: usize) -> Option<TrackerVelocity> {
-        self.shared
-            .latest_velocity
-            .borrow()
-            .get(sensor)
-            .copied()
-            .flatten()
+        self.shared.latest_velocity.get(sensor)
+    }
+
+    /// The latest velocity of `sensor` if new since the last `take_velocity(sensor)`.
+    pub fn take_velocity(&self, sensor: usize) -> Option<TrackerVelocity> {
+        self.shared.latest_velocity.take(sensor)
     }
 
     /// The latest acceleration of `sensor`.
     pub fn acceleration(&self, sensor: usize) -> Option<TrackerAcceleration> {
-        self.shared
-            .latest_acceleration
-            .borrow()
-            .get(sensor)
-            .copied()
-            .flatten()
+        self.shared.latest_acceleration.get(sensor)
+    }
+
+    /// The latest acceleration of `sensor` if new since the last `take_acceleration(sensor)`.
+    pub fn take_acceleration(&self, sensor: usize) -> Option<TrackerAcceleration> {
+        self.shared.latest_acceleration.take(sensor)
+    }
+
+    /// Pose reports received for `sensor` so far (the `seq` of the latest one).
+    pub fn pose_count(&self, sensor: usize) -> u64 {
+        self.shared.latest_pose.seq(sensor)
     }
 
     /// Number of sensor slots seen so far (highest sensor index + 1).
     pub fn sensor_count(&self) -> usize {
-        self.shared.latest_pose.borrow().len()
+        self.shared.latest_pose.len()
     }
 
     /// Reports that could not be decoded (wrong length, negative sensor) and were ignored.
@@ -478,6 +534,9 @@ mod tests {
         let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2);
         let v = TrackerVelocity {
             time: TimeVal::ZERO,
+            sender_time: TimeVal::ZERO,
+            arrival: TimeVal::ZERO,
+            seq: 1,
             sensor: 0,
             vel: Vector3::zeros(),
             vel_quat: q,
@@ -501,6 +560,9 @@ mod tests {
         let q = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.2);
         let a = TrackerAcceleration {
             time: TimeVal::ZERO,
+            sender_time: TimeVal::ZERO,
+            arrival: TimeVal::ZERO,
+            seq: 1,
             sensor: 0,
             acc: Vector3::zeros(),
             acc_quat: q,

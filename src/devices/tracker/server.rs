@@ -6,9 +6,10 @@ use std::rc::Rc;
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{codec, xyzw, TrackerIds};
-use crate::connection::Connection;
+use crate::connection::{Connection, ServiceClass};
 use crate::devices::base::{self, BaseIds};
-use crate::dispatch::{HandlerId, SenderFilter};
+use crate::devices::latest::Index;
+use crate::dispatch::{HandlerId, SenderFilter, SenderId};
 use crate::error::Error;
 use crate::time::TimeVal;
 use crate::wire::class;
@@ -49,7 +50,7 @@ pub struct TrackerServer {
     num_sensors: usize,
     /// Time of the last report; request handlers set it to "now", as C++ does.
     timestamp: Rc<Cell<TimeVal>>,
-    class: u32,
+    class: ServiceClass,
 }
 
 impl TrackerServer {
@@ -120,13 +121,18 @@ impl TrackerServer {
             base,
             num_sensors,
             timestamp,
-            class: class::LOW_LATENCY,
+            class: ServiceClass::LOW_LATENCY,
         })
     }
 
     /// Class of service for reports (LOW_LATENCY by default, as every C++ tracker).
-    pub fn set_class_of_service(&mut self, class_of_service: u32) {
-        self.class = class_of_service;
+    pub fn set_class_of_service(&mut self, class_of_service: impl Into<ServiceClass>) {
+        self.class = class_of_service.into();
+    }
+
+    /// This device's sender id on its connection.
+    pub fn sender(&self) -> SenderId {
+        self.base.sender
     }
 
     /// Number of sensors.
@@ -139,8 +145,11 @@ impl TrackerServer {
         self.timestamp.get()
     }
 
-    fn check_sensor(&self, sensor: i32) -> Result<(), Error> {
-        if sensor < 0 || sensor as usize >= self.num_sensors {
+    /// The wire's sensor number of `sensor`, or an error (and a text, as C++) when it is
+    /// outside the configured count.
+    fn check_sensor(&self, sensor: impl Index) -> Result<i32, Error> {
+        let i = sensor.to_index().filter(|&i| i < self.num_sensors);
+        let Some(i) = i else {
             let _ = self.send_text(
                 crate::devices::text::TextSeverity::Error,
                 0,
@@ -149,19 +158,21 @@ impl TrackerServer {
             return Err(Error::Unsupported(
                 "sensor number outside the configured count",
             ));
-        }
-        Ok(())
+        };
+        Ok(i as i32)
     }
 
-    /// Reports a pose.
+    /// Reports a pose: position in metres, orientation as a unit quaternion in VRPN's
+    /// **(x, y, z, w)** order. `sensor` is a `usize` (or any integer; outside the configured
+    /// count is an error).
     pub fn report_pose(
         &self,
-        sensor: i32,
+        sensor: impl Index,
         time: TimeVal,
         pos: [f64; 3],
         quat: [f64; 4],
     ) -> Result<(), Error> {
-        self.check_sensor(sensor)?;
+        let sensor = self.check_sensor(sensor)?;
         self.timestamp.set(time);
         let mut buf = [0u8; codec::PosQuat::LEN];
         codec::PosQuat {
@@ -178,7 +189,7 @@ impl TrackerServer {
     /// Reports a pose given as nalgebra types.
     pub fn report(
         &self,
-        sensor: i32,
+        sensor: impl Index,
         time: TimeVal,
         pos: &Vector3<f64>,
         quat: &UnitQuaternion<f64>,
@@ -186,16 +197,17 @@ impl TrackerServer {
         self.report_pose(sensor, time, [pos.x, pos.y, pos.z], xyzw(quat))
     }
 
-    /// Reports a velocity: linear m/s and the rotation over `dt` seconds.
+    /// Reports a velocity: linear m/s and the rotation over `dt` seconds (quaternion
+    /// x, y, z, w).
     pub fn report_velocity(
         &self,
-        sensor: i32,
+        sensor: impl Index,
         time: TimeVal,
         vel: [f64; 3],
         vel_quat: [f64; 4],
         dt: f64,
     ) -> Result<(), Error> {
-        self.check_sensor(sensor)?;
+        let sensor = self.check_sensor(sensor)?;
         let mut buf = [0u8; codec::Velocity::LEN];
         codec::Velocity {
             sensor,
@@ -209,16 +221,17 @@ impl TrackerServer {
             .pack_message(time, self.ids.velocity, self.base.sender, &buf, self.class)
     }
 
-    /// Reports an acceleration: linear m/s² and the change of the rotation rate over `dt`.
+    /// Reports an acceleration: linear m/s² and the change of the rotation rate over `dt`
+    /// (quaternion x, y, z, w).
     pub fn report_acceleration(
         &self,
-        sensor: i32,
+        sensor: impl Index,
         time: TimeVal,
         acc: [f64; 3],
         acc_quat: [f64; 4],
         dt: f64,
     ) -> Result<(), Error> {
-        self.check_sensor(sensor)?;
+        let sensor = self.check_sensor(sensor)?;
         let mut buf = [0u8; codec::Acceleration::LEN];
         codec::Acceleration {
             sensor,

@@ -487,9 +487,11 @@ impl Session {
         remote.bind(h.sender, local);
         if is_sender {
             // A sender is one the peer offers if it is in the peer's own table (described
-            // before its first type) or a name this side never registered.
+            // before its first type) or a name this side never registered. The clock-sync
+            // sender is the protocol's own, not a device.
             let own = !p.senders_complete || !names.senders.is_registered(local);
-            if own && p.offered.insert(local) {
+            let device = name != crate::wire::payload::clock::SENDER.as_bytes();
+            if own && device && p.offered.insert(local) {
                 return Outcome::Deliver(Delivery::PeerSender(local));
             }
         }
