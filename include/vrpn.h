@@ -102,6 +102,10 @@ enum VrpnStatus
      * A bug in the library was caught at the boundary (a Rust panic); the text says where.
      */
     VRPN_STATUS_INTERNAL = -12,
+    /**
+     * A client was asked to send before its connection is up (nothing was queued).
+     */
+    VRPN_STATUS_NOT_CONNECTED = -13,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
