@@ -9,8 +9,10 @@ mod output;
 #[path = "common/signals.rs"]
 mod signals;
 
+use std::cell::Cell;
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use serde::ser::{SerializeMap, Serializer as _};
@@ -29,7 +31,9 @@ const USAGE: &str =
        vrpn_print_devices --list HOST[:PORT]
        vrpn_print_devices --help | --version
   DEVICE@HOST        e.g. Tracker0@localhost, Tracker0@tcp://host:3883, Tracker0@host:3884
-  --json             one JSON object per report: device, kind, time, and the values
+  --json             one JSON object per report: device, kind, time (local clock),
+                     server_time (as stamped by the server), clock_offset and
+                     clock_uncertainty once the clocks are synchronised, and the values
   --seconds S        exit after S seconds (default: run until interrupted)
   --log FILE         log every message received to FILE (C++ .vrpn format; one file per
                      server: FILE-2.vrpn, … for the second and later); replay it with
@@ -86,20 +90,41 @@ fn parse_args() -> Result<Command, lexopt::Error> {
     }
 }
 
-/// Formats one JSON report line: `device`, `kind` and `time` (seconds since the epoch), then
-/// the fields `fields` adds, in that order.
+/// The clock-synchronisation estimate of a device's connection as of the last loop pass:
+/// offset (server clock minus ours) and its uncertainty, in seconds; `None` while no sync is in
+/// effect (a C++ server never answers the exchange).
+type ClockView = Rc<Cell<Option<(f64, f64)>>>;
+
+/// A report's two timestamps: `time` in local time when sync is in effect (else as stamped),
+/// `sender_time` as the server stamped it.
+#[derive(Clone, Copy)]
+struct Stamp {
+    time: TimeVal,
+    sender_time: TimeVal,
+}
+
+/// Formats one JSON report line: `device`, `kind`, `time` (local-clock seconds since the epoch,
+/// translated when clock sync is in effect), `server_time` (as the server stamped it) and, once
+/// known, `clock_offset` and `clock_uncertainty` (seconds); then the fields `fields` adds, in
+/// that order.
 fn json_report(
     device: &str,
     kind: &str,
-    time: TimeVal,
+    stamp: Stamp,
+    clock: &ClockView,
     fields: impl FnOnce(&mut Compound<'_, &mut Vec<u8>, CompactFormatter>) -> serde_json::Result<()>,
 ) -> String {
-    let mut buf = Vec::with_capacity(200);
+    let mut buf = Vec::with_capacity(256);
     let mut ser = serde_json::Serializer::new(&mut buf);
     let written = ser.serialize_map(None).and_then(|mut map| {
         map.serialize_entry("device", device)?;
         map.serialize_entry("kind", kind)?;
-        map.serialize_entry("time", &time.as_secs_f64())?;
+        map.serialize_entry("time", &stamp.time.as_secs_f64())?;
+        map.serialize_entry("server_time", &stamp.sender_time.as_secs_f64())?;
+        if let Some((offset, uncertainty)) = clock.get() {
+            map.serialize_entry("clock_offset", &offset)?;
+            map.serialize_entry("clock_uncertainty", &uncertainty)?;
+        }
         fields(&mut map)?;
         map.end()
     });
@@ -177,6 +202,12 @@ fn main() -> ExitCode {
 
 /// The remotes of one named device.
 struct Opened {
+    /// The name as given.
+    name: String,
+    /// Its connection's clock estimate, updated every pass for the printers.
+    clock: ClockView,
+    /// JSON output (no clock lines).
+    json: bool,
     tracker: TrackerRemote,
     button: ButtonRemote,
     analog: AnalogRemote,
@@ -186,11 +217,37 @@ struct Opened {
 
 impl Opened {
     fn mainloop(&self) -> Result<(), vrpn::Error> {
+        self.update_clock();
         self.tracker.mainloop()?;
         self.button.mainloop()?;
         self.analog.mainloop()?;
         self.dial.mainloop()?;
         self.text.mainloop()
+    }
+
+    /// Takes the connection's clock estimate for this pass's reports, and says (in the text
+    /// format) when synchronisation comes into effect or lapses.
+    fn update_clock(&self) {
+        let now = self
+            .tracker
+            .connection()
+            .clock_estimate()
+            .map(|e| (e.offset, e.uncertainty));
+        let was = self.clock.replace(now);
+        if self.json || was.is_some() == now.is_some() {
+            return;
+        }
+        let _ = match now {
+            Some((offset, uncertainty)) => outln!(
+                "Clock of {}: server clock {offset:+.6} s from ours (± {uncertainty:.6} s); \
+                 report times are in local time",
+                self.name
+            ),
+            None => outln!(
+                "Clock of {}: synchronisation lapsed; report times are the server's",
+                self.name
+            ),
+        };
     }
 }
 
@@ -266,14 +323,14 @@ fn print(o: &PrintOptions) -> u8 {
 
 /// Attaches the tracker printers to `tracker` (the C++ formats, or JSON objects of kind pose,
 /// velocity and acceleration).
-fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool) {
+fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &ClockView) {
     let device = tracker.device().to_string();
-    let (d, l) = (device.clone(), label.to_owned());
+    let (d, l, ck) = (device.clone(), label.to_owned(), clock.clone());
     tracker.on_pose(move |r| {
         if json {
             outln!(
                 "{}",
-                json_report(&d, "pose", r.time, |m| {
+                json_report(&d, "pose", Stamp { time: r.time, sender_time: r.sender_time }, &ck, |m| {
                     m.serialize_entry("sensor", &r.sensor)?;
                     m.serialize_entry("pos", &[r.pos.x, r.pos.y, r.pos.z])?;
                     m.serialize_entry("quat", &[r.quat.i, r.quat.j, r.quat.k, r.quat.w])
@@ -286,14 +343,14 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool) {
             );
         }
     });
-    let (d, l) = (device.clone(), label.to_owned());
+    let (d, l, ck) = (device.clone(), label.to_owned(), clock.clone());
     tracker.on_velocity(move |r| {
         let q = &r.vel_quat;
         if json {
             let w = r.angular_velocity();
             outln!(
                 "{}",
-                json_report(&d, "velocity", r.time, |m| {
+                json_report(&d, "velocity", Stamp { time: r.time, sender_time: r.sender_time }, &ck, |m| {
                     m.serialize_entry("sensor", &r.sensor)?;
                     m.serialize_entry("vel", &[r.vel.x, r.vel.y, r.vel.z])?;
                     m.serialize_entry("vel_quat", &[q.i, q.j, q.k, q.w])?;
@@ -308,13 +365,13 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool) {
             );
         }
     });
-    let (d, l) = (device, label.to_owned());
+    let (d, l, ck) = (device, label.to_owned(), clock.clone());
     tracker.on_acceleration(move |r| {
         let q = &r.acc_quat;
         if json {
             outln!(
                 "{}",
-                json_report(&d, "acceleration", r.time, |m| {
+                json_report(&d, "acceleration", Stamp { time: r.time, sender_time: r.sender_time }, &ck, |m| {
                     m.serialize_entry("sensor", &r.sensor)?;
                     m.serialize_entry("acc", &[r.acc.x, r.acc.y, r.acc.z])?;
                     m.serialize_entry("acc_quat", &[q.i, q.j, q.k, q.w])?;
@@ -334,19 +391,20 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool) {
 /// the printers (the C++ formats, or JSON objects of kind pose, velocity, acceleration, button,
 /// button_states, analog, dial and text).
 fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened, vrpn::Error> {
-    print_tracker(&tracker, name, json);
+    let clock = ClockView::default();
+    print_tracker(&tracker, name, json, &clock);
     let button = ButtonRemote::new(name)?;
     let analog = AnalogRemote::new(name)?;
     let dial = DialRemote::new(name)?;
     let text = TextReceiver::new(name)?;
     let device = button.device().to_string();
     let label = name.to_string();
-    let (dv, l) = (device.clone(), label.clone());
+    let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
     button.on_change(move |c| {
         if json {
             outln!(
                 "{}",
-                json_report(&dv, "button", c.time, |m| {
+                json_report(&dv, "button", Stamp { time: c.time, sender_time: c.sender_time }, &ck, |m| {
                     m.serialize_entry("button", &c.button)?;
                     m.serialize_entry("state", &c.state.raw())
                 })
@@ -359,15 +417,24 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
             );
         }
     });
-    let (dv, l) = (device.clone(), label.clone());
+    let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
     button.on_states(move |st| {
         if json {
             outln!(
                 "{}",
-                json_report(&dv, "button_states", st.time, |m| {
-                    let raw: Vec<i32> = st.as_slice().iter().map(|b| b.raw()).collect();
-                    m.serialize_entry("states", &raw)
-                })
+                json_report(
+                    &dv,
+                    "button_states",
+                    Stamp {
+                        time: st.time,
+                        sender_time: st.sender_time
+                    },
+                    &ck,
+                    |m| {
+                        let raw: Vec<i32> = st.as_slice().iter().map(|b| b.raw()).collect();
+                        m.serialize_entry("states", &raw)
+                    }
+                )
             );
         } else {
             let mut s = format!("Button {l} has {} buttons with states:", st.num_buttons);
@@ -377,14 +444,21 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
             outln!("{s}");
         }
     });
-    let (dv, l) = (device.clone(), label.clone());
+    let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
     analog.on_report(move |r| {
         if json {
             outln!(
                 "{}",
-                json_report(&dv, "analog", r.time, |m| {
-                    m.serialize_entry("channels", r.channels())
-                })
+                json_report(
+                    &dv,
+                    "analog",
+                    Stamp {
+                        time: r.time,
+                        sender_time: r.sender_time
+                    },
+                    &ck,
+                    |m| { m.serialize_entry("channels", r.channels()) }
+                )
             );
         } else {
             let mut s = format!("Analog {l}:\n         ");
@@ -398,21 +472,30 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
             outln!("{s}");
         }
     });
-    let (dv, l) = (device.clone(), label.clone());
+    let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
     dial.on_update(move |u| {
         if json {
             outln!(
                 "{}",
-                json_report(&dv, "dial", u.time, |m| {
-                    m.serialize_entry("dial", &u.dial)?;
-                    m.serialize_entry("change", &u.change)
-                })
+                json_report(
+                    &dv,
+                    "dial",
+                    Stamp {
+                        time: u.time,
+                        sender_time: u.sender_time
+                    },
+                    &ck,
+                    |m| {
+                        m.serialize_entry("dial", &u.dial)?;
+                        m.serialize_entry("change", &u.change)
+                    }
+                )
             );
         } else {
             outln!("Dial {l}, number {} was moved by {:5.2}", u.dial, u.change);
         }
     });
-    let (dv, l) = (device, label);
+    let (dv, l, ck) = (device, label, clock.clone());
     text.on_message(move |msg| {
         if json {
             let severity = match msg.severity {
@@ -423,11 +506,20 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
             };
             outln!(
                 "{}",
-                json_report(&dv, "text", msg.time, |m| {
-                    m.serialize_entry("severity", severity)?;
-                    m.serialize_entry("level", &msg.level)?;
-                    m.serialize_entry("text", msg.text())
-                })
+                json_report(
+                    &dv,
+                    "text",
+                    Stamp {
+                        time: msg.time,
+                        sender_time: msg.sender_time
+                    },
+                    &ck,
+                    |m| {
+                        m.serialize_entry("severity", severity)?;
+                        m.serialize_entry("level", &msg.level)?;
+                        m.serialize_entry("text", msg.text())
+                    }
+                )
             );
         } else if msg.severity == TextSeverity::Normal {
             // Warnings and errors are printed by the default text printer.
@@ -435,6 +527,9 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
         }
     });
     Ok(Opened {
+        name: name.to_string(),
+        clock,
+        json,
         tracker,
         button,
         analog,

@@ -117,3 +117,57 @@ fn a_shifted_server_clock_is_translated_on_the_udp_path() {
 fn a_shifted_server_clock_is_translated_on_the_tcp_path() {
     poses_through("tcp://127.0.0.1:PORT");
 }
+
+/// `vrpn_print_devices --json` gives each report its local `time`, the server's own
+/// `server_time` and, once sync is in effect, `clock_offset` and `clock_uncertainty`; the text
+/// format says when the server's clock becomes known.
+#[test]
+fn print_devices_shows_the_offset_and_both_times() {
+    let server = common::start_server_with(
+        "vrpn_Tracker_NULL Tracker0 1 50\n",
+        0,
+        &["-clockshift", &SHIFT.to_string()],
+    );
+    let name = format!("Tracker0@tcp://127.0.0.1:{}", server.port);
+    let run = |json: bool| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_vrpn_print_devices"));
+        if json {
+            cmd.arg("--json");
+        }
+        let out = cmd.args(["--seconds", "1.5", &name]).output().unwrap();
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let json = run(true);
+    let poses: Vec<serde_json::Value> = json
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .filter(|v: &serde_json::Value| v["kind"] == "pose")
+        .collect();
+    assert!(poses.len() > 20, "{json}");
+    let synced: Vec<&serde_json::Value> = poses
+        .iter()
+        .filter(|p| p.get("clock_offset").is_some())
+        .collect();
+    assert!(synced.len() > 10, "sync never took effect: {json}");
+    for p in &synced {
+        let (time, server_time) = (
+            p["time"].as_f64().unwrap(),
+            p["server_time"].as_f64().unwrap(),
+        );
+        let offset = p["clock_offset"].as_f64().unwrap();
+        let uncertainty = p["clock_uncertainty"].as_f64().unwrap();
+        assert!((offset - SHIFT).abs() <= uncertainty + 1e-3, "{p}");
+        assert!((server_time - time - offset).abs() < 2e-3, "{p}");
+    }
+    // Before sync (if any report came that early) the two times are the same.
+    for p in poses.iter().filter(|p| p.get("clock_offset").is_none()) {
+        assert_eq!(p["time"], p["server_time"], "{p}");
+    }
+    let text = run(false);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("Clock of "))
+        .unwrap_or_else(|| panic!("no clock line in {text}"));
+    assert!(line.contains("server clock +7.25"), "{line}");
+}

@@ -18,8 +18,11 @@ use crate::wire::class;
 /// A text message (C++ `vrpn_TEXTCB`). The text is kept in a fixed buffer (no allocation).
 #[derive(Clone, Copy, Debug)]
 pub struct TextMessage {
-    /// Time the sender stamped on the message.
+    /// When the sender stamped the message, in local time when clock synchronisation with it
+    /// is in effect (see [`Connection::clock_estimate`](crate::Connection::clock_estimate)).
     pub time: TimeVal,
+    /// The time as the sender stamped it, on its own clock.
+    pub sender_time: TimeVal,
     /// Severity.
     pub severity: TextSeverity,
     /// Level (free-form).
@@ -81,6 +84,7 @@ impl TextReceiver {
             if let Some((severity, level, text)) = decode_text(m.payload) {
                 let mut msg = TextMessage {
                     time: m.time,
+                    sender_time: m.sender_time,
                     severity,
                     level,
                     len: text.len().min(MAX_TEXT),
