@@ -59,6 +59,8 @@ pub mod log;
 pub mod name;
 pub mod net;
 pub mod proto;
+#[cfg(feature = "python")]
+mod python;
 pub mod serial;
 pub mod server;
 pub mod time;
