@@ -40,6 +40,25 @@ class Child:
         threading.Thread(target=lambda: self.stderr.append(self.proc.stderr.read()), daemon=True).start()
         return line
 
+    def collect(self):
+        """Reads stdout and stderr in threads while the caller runs its loop; `wait()` then
+        returns (stdout, stderr)."""
+        out, err = [], []
+        self._readers = [
+            threading.Thread(target=lambda: out.append(self.proc.stdout.read()), daemon=True),
+            threading.Thread(target=lambda: err.append(self.proc.stderr.read()), daemon=True),
+        ]
+        for r in self._readers:
+            r.start()
+        self._collected = (out, err)
+
+    def wait(self, timeout):
+        self.proc.wait(timeout=timeout)
+        for r in self._readers:
+            r.join(timeout)
+        out, err = self._collected
+        return "".join(out), "".join(err)
+
     def stop(self):
         if self.proc.poll() is None:
             os.kill(self.pid, signal.SIGKILL)

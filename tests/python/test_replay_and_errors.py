@@ -4,18 +4,24 @@ and the errors a Python user sees for bad names, hosts, files and arguments."""
 import pytest
 
 import vrpn
-from conftest import Child, program, pump
+from conftest import Child, VrpnServer, program, pump
 
 
-@pytest.fixture
-def recorded_log(start_server, tmp_path):
-    """A log of about 1.5 s of a 100 Hz, 1-sensor Spin tracker."""
-    server = start_server("vrpn_Tracker_Spin Tracker0 1 100.0 0 0 1 0.5\n")
-    path = tmp_path / "session.vrpn"
-    child = Child([program("vrpn_print_devices"), "--seconds", "1.5", "--log", str(path),
-                   f"Tracker0@127.0.0.1:{server.port}"])
-    _, err = child.proc.communicate(timeout=30)
-    child.stop()
+@pytest.fixture(scope="module")
+def recorded_log(tmp_path_factory):
+    """A log of about 1.5 s of a 100 Hz, 1-sensor Spin tracker (recorded once per module)."""
+    tmp = tmp_path_factory.mktemp("replay")
+    cfg = tmp / "vrpn.cfg"
+    cfg.write_text("vrpn_Tracker_Spin Tracker0 1 100.0 0 0 1 0.5\n")
+    server = VrpnServer(cfg)
+    path = tmp / "session.vrpn"
+    try:
+        child = Child([program("vrpn_print_devices"), "--seconds", "1.5", "--log", str(path),
+                       f"Tracker0@127.0.0.1:{server.port}"])
+        _, err = child.proc.communicate(timeout=30)
+        child.stop()
+    finally:
+        server.stop()
     assert child.proc.returncode == 0, err
     return path
 

@@ -24,6 +24,7 @@ def test_python_server_read_by_vrpn_print_devices():
     at = f"127.0.0.1:{server.port}"
     child = Child([program("vrpn_print_devices"), "--json", "--seconds", "3",
                    f"Tracker0@{at}", f"Button0@{at}", f"Analog0@{at}"])
+    child.collect()
     n = 0
     end = time.monotonic() + 20
     while child.proc.poll() is None and time.monotonic() < end:
@@ -35,7 +36,7 @@ def test_python_server_read_by_vrpn_print_devices():
             analog.report([0.5, -0.25, float(n)])
             n += 1
         time.sleep(0.005)
-    out, err = child.proc.communicate(timeout=10)
+    out, err = child.wait(timeout=10)
     child.stop()
     assert child.proc.returncode == 0, err
     lines = [json.loads(line) for line in out.splitlines() if line.startswith("{")]
