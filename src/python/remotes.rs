@@ -130,8 +130,9 @@ impl ButtonRemote {
         })
     }
 
-    /// Latest state of button `i` (1 pressed, 0 released or unknown).
-    fn state(&self, i: usize) -> i32 {
+    /// Latest state of button `i` (1 pressed, 0 released or unknown). (Not `state`: that is
+    /// the connection state every remote has.)
+    fn button_state(&self, i: usize) -> i32 {
         self.inner.state(i)
     }
 

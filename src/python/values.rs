@@ -5,6 +5,7 @@
 //! pays for one field.
 
 use pyo3::prelude::*;
+use pyo3::types::PyList;
 
 use crate::devices::text::TextSeverity;
 use crate::wire::payload::analog::CHANNEL_MAX;
@@ -190,8 +191,8 @@ pub(crate) struct ButtonStates(pub(crate) crate::ButtonStates);
 impl ButtonStates {
     /// State of each button (1 pressed, 0 released), as many as the device has.
     #[getter]
-    fn states(&self) -> Vec<i32> {
-        self.0.as_slice().to_vec()
+    fn states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        PyList::new(py, self.0.as_slice())
     }
     /// Number of buttons.
     #[getter]
@@ -220,8 +221,8 @@ pub(crate) struct AnalogReport(pub(crate) crate::AnalogReport);
 impl AnalogReport {
     /// The channel values.
     #[getter]
-    fn channels(&self) -> Vec<f64> {
-        self.0.channels().to_vec()
+    fn channels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        PyList::new(py, self.0.channels())
     }
     /// Number of channels.
     #[getter]
