@@ -210,6 +210,16 @@ impl Remote {
         Ok(())
     }
 
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let class = slf.get_type().name()?;
+        let this = slf.borrow();
+        Ok(format!(
+            "<vrpn.{class} {:?} {}>",
+            this.dev.core().device(),
+            state_name(this.conn().state())
+        ))
+    }
+
     fn __traverse__(&self, visit: PyVisit<'_>) -> Result<(), PyTraverseError> {
         self.reg.traverse(&visit)
     }

@@ -110,6 +110,14 @@ impl Server {
         Ok(())
     }
 
+    fn __repr__(&self) -> String {
+        let port = self.conn.local_port().unwrap_or(0);
+        format!(
+            "<vrpn.Server port={port} {}>",
+            state_name(self.conn.state())
+        )
+    }
+
     fn __traverse__(&self, visit: PyVisit<'_>) -> Result<(), PyTraverseError> {
         self.reg.traverse(&visit)
     }

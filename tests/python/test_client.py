@@ -118,3 +118,7 @@ def test_a_live_remote_has_no_replay_controls(start_server):
     t = vrpn.TrackerRemote(f"Tracker0@127.0.0.1:{server.port}")
     assert t.replay is None
     assert t.device == "Tracker0"
+    assert repr(t) == '<vrpn.TrackerRemote "Tracker0" connecting>'
+    pump([t], lambda: t.connected, what="the connection")
+    assert repr(t) == '<vrpn.TrackerRemote "Tracker0" connected>'
+    assert repr(vrpn.Server(0)).startswith("<vrpn.Server port=")
