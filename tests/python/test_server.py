@@ -78,6 +78,40 @@ def test_python_server_read_by_python_remotes():
     assert (texts[0].text, texts[0].severity, texts[0].level) == ("careful", "warning", 3)
 
 
+def test_velocity_buttons_and_analogs_round_trip_between_python_objects():
+    server = vrpn.Server(0)
+    tracker = vrpn.TrackerServer(server, "Dev0", sensors=2)
+    buttons = vrpn.ButtonServer(server, "Dev0", buttons=3)
+    analog = vrpn.AnalogServer(server, "Dev0", channels=2)
+    at = f"Dev0@127.0.0.1:{server.port}"
+    t, b, a = vrpn.TrackerRemote(at), vrpn.ButtonRemote(at), vrpn.AnalogRemote(at)
+    velocities, changes, reports = [], [], []
+    t.on_velocity(velocities.append)
+    b.on_change(changes.append)
+    a.on_report(reports.append)
+    pump([server, t], lambda: t.connected and b.num_buttons == 3, what="the button count")
+    assert b.button_state(2) == 0 and not b.pressed(2)
+
+    tracker.report_velocity(1, (0.5, 0.0, 0.0), (0.0, 0.0, HALF, HALF), 0.25, time=10.0)
+    buttons.set_button(2, True)
+    buttons.report_changes(time=11.0)
+    analog.set_channel(1, -0.75)
+    assert analog.report_changes(time=12.0) is True
+    assert analog.report_changes() is False  # nothing changed since
+    pump([server, t], lambda: velocities and changes and reports, what="the reports")
+
+    v = t.velocity(1)
+    assert v is not None and t.velocity(0) is None and velocities[0].time == 10.0
+    assert v.vel == (0.5, 0.0, 0.0) and v.vel_quat_dt == 0.25
+    # 90 degrees about z in 0.25 s: 2*pi rad/s about z.
+    assert abs(v.angular_velocity[2] - 2 * math.pi) < 1e-9
+    assert (changes[0].button, changes[0].pressed, changes[0].time) == (2, True, 11.0)
+    assert b.button_state(2) == 1 and b.pressed(2)
+    assert reports[0].channels == [0.0, -0.75] and a.latest().time == 12.0
+    with pytest.raises(ValueError, match="3 values given for 2 channels"):
+        analog.report([1.0, 2.0, 3.0])
+
+
 def test_a_raising_callback_surfaces_from_mainloop_and_the_loop_goes_on():
     server = vrpn.Server(0)
     tracker = vrpn.TrackerServer(server, "Tracker0")
