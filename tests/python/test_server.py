@@ -197,3 +197,20 @@ def test_server_errors_carry_the_crate_messages():
         vrpn.TextSender(server, "T").send("x", severity="loud")
     with pytest.raises(ValueError, match="length 3"):
         tracker.report_pose(0, (0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+
+def test_notices_go_to_python_instead_of_stderr():
+    import socket
+
+    server = vrpn.Server(0)
+    notices, states = [], []
+    server.on_notice(notices.append)
+    server.on_state_change(states.append)
+    # Something that is not VRPN connects to the server's TCP port.
+    with socket.create_connection(("127.0.0.1", server.port)) as s:
+        s.sendall(b"GET / HTTP/1.0\r\n\r\n" * 4)
+        pump([server], lambda: notices, what="a notice about the bad peer")
+    assert isinstance(notices[0], vrpn.Notice)
+    assert notices[0].severity in ("info", "warning", "error")
+    assert "127.0.0.1" in notices[0].text and "bad cookie" in notices[0].text, notices[0].text
+    assert states == [] and server.state == "listening"
