@@ -196,7 +196,7 @@ class Remote:
     def mainloop(self) -> None:
         """Reads what arrived and runs the callbacks; raises a callback's exception."""
     def wait(self, timeout: float) -> bool:
-        """Blocks (holding the GIL) until data arrives or ``timeout`` seconds pass."""
+        """Sleeps (GIL released) until data arrives, work is due or ``timeout`` s pass."""
     @property
     def device(self) -> str: ...
     @property

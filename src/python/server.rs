@@ -11,7 +11,7 @@ use pyo3::PyTraverseError;
 
 use super::callbacks::{run, Owner, Registry};
 use super::remote::state_name;
-use super::remote::{on_event, on_notice, on_state_change, remove_connection_handlers, seconds};
+use super::remote::{on_event, on_notice, on_state_change, remove_connection_handlers, wait};
 use super::{time_or_now, to_py};
 use crate::devices::text::TextSeverity;
 use crate::Connection;
@@ -55,11 +55,11 @@ impl Server {
         run(|| self.conn.mainloop())
     }
 
-    /// Blocks until a client sends something or `timeout` seconds pass (holding the GIL);
-    /// returns whether data arrived. Call `mainloop()` next.
-    fn wait(&self, timeout: f64) -> PyResult<bool> {
-        let t = seconds(timeout)?;
-        run(|| self.conn.wait(t))
+    /// Sleeps until a client sends something, the connection has work due, or `timeout`
+    /// seconds pass, letting other Python threads run; returns whether data arrived. Call
+    /// `mainloop()` next.
+    fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<bool> {
+        wait(py, &self.conn, timeout)
     }
 
     /// The port the server listens on.

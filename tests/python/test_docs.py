@@ -3,6 +3,7 @@
 import re
 import sys
 import threading
+import time
 
 import pytest
 
@@ -49,3 +50,45 @@ def test_objects_refuse_another_thread():
     assert len(caught) == 1 and "unsendable" in str(caught[0])
     t.mainloop()  # still fine on its own thread
     assert t.pose(0) is None
+
+
+def test_wait_lets_other_threads_run_and_wakes_on_data():
+    server = vrpn.Server(0)
+    tracker = vrpn.TrackerServer(server, "Tracker0")
+    t = vrpn.TrackerRemote(f"Tracker0@127.0.0.1:{server.port}")
+    ticks = []
+    stop = threading.Event()
+
+    def ticker():
+        while not stop.is_set():
+            ticks.append(time.monotonic())
+            time.sleep(0.001)
+
+    th = threading.Thread(target=ticker)
+    th.start()
+    try:
+        # Nothing to read on an idle server: wait() sleeps (until its timeout or the server's
+        # next deadline) with the GIL released.
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 0.3:
+            assert server.wait(0.3) is False
+        t1 = time.monotonic()
+        during = [x for x in ticks if t0 < x < t1]
+        assert len(during) >= 30, f"only {len(during)} ticks of the other thread in 0.3 s"
+    finally:
+        stop.set()
+        th.join()
+    # Data wakes it early.
+    while not (server.connected and t.connected):
+        server.wait(0.01)
+        server.mainloop()
+        t.wait(0.01)
+        t.mainloop()
+    tracker.report_pose(0, (1.0, 2.0, 3.0), (0.0, 0.0, 0.0, 1.0))
+    server.mainloop()
+    t0 = time.monotonic()
+    while t.pose(0) is None:
+        assert time.monotonic() - t0 < 5
+        t.wait(5.0)
+        t.mainloop()
+    assert time.monotonic() - t0 < 1.0
