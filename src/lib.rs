@@ -86,6 +86,8 @@ pub mod net;
 // crate's own simulation tests. Its user-facing types are re-exported from `connection`.
 #[doc(hidden)]
 pub mod proto;
+#[cfg(feature = "python")]
+mod python;
 pub mod serial;
 pub mod server;
 pub mod time;
