@@ -53,7 +53,9 @@ pub(crate) fn to_py(e: Error) -> PyErr {
     match e {
         Error::Name(_) => DeviceNameError::new_err(text),
         Error::Resolve { .. } => ResolveError::new_err(text),
-        Error::Log(_) => LogFileError::new_err(text),
+        Error::Log(_) | Error::LogNotFound { .. } | Error::LogDamaged(_) => {
+            LogFileError::new_err(text)
+        }
         _ => VrpnError::new_err(text),
     }
 }
