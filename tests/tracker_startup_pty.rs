@@ -3,8 +3,8 @@
 //! socket on 127.0.0.1. Each test measures the time from starting the server to the first
 //! report's time stamp (the whole reset included), prints it (`--nocapture`), and checks it is
 //! far below C++'s fixed sleeps (at least 7.2 s for a Fastrak, about 19 s for a Flock), and that
-//! every sensor and station device reports. The tracker's text messages are printed too, with their
-//! times, to show where the start-up went.
+//! every sensor and station device reports. The tracker's text messages are printed too, with
+//! their times, to show where the start-up went.
 
 mod common;
 
