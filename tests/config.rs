@@ -124,9 +124,15 @@ fn sample_config_commented_examples_parse() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("vrpn.cfg.sample"))
             .unwrap();
     let mut uncommented = String::new();
+    // After a Fastrak line ending in '\\' or '/', the next line continues the entry.
+    let mut continued = false;
     for line in text.lines() {
         if let Some(rest) = line.strip_prefix('#') {
-            if rest.starts_with("vrpn_")
+            let continues = continued;
+            continued = rest.starts_with("vrpn_Tracker_Fastrak") || continues;
+            continued &= rest.ends_with(['\\', '/']);
+            if continues
+                || rest.starts_with("vrpn_")
                 || [
                     "X",
                     "Y",
@@ -165,11 +171,41 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Joylin",
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Fastrak",
+            "vrpn_Tracker_Fastrak",
+            "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
             "vrpn_CerealBox",
             "vrpn_Tracker_Dyna"
+        ]
+    );
+    // The Fastrak examples' continuation lines are read as such.
+    let fastraks: Vec<&Fastrak> = entries
+        .iter()
+        .filter_map(|e| match &e.config {
+            DeviceConfig::Fastrak(f) => Some(f),
+            _ => None,
+        })
+        .collect();
+    let shape: Vec<(usize, usize, bool, bool)> = fastraks
+        .iter()
+        .map(|f| {
+            (
+                f.reset_commands.len(),
+                f.stations.len(),
+                f.is900_timestamps,
+                f.really_fastrak(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        shape,
+        [
+            (0, 0, false, false),
+            (0, 1, false, true),
+            (0, 2, true, false),
+            (4, 1, false, false)
         ]
     );
 }
