@@ -64,6 +64,7 @@
 //! nothing is registered does the default printer write them, to stderr, one line each
 //! ([`connection::set_text_printer`] chooses C++'s stdout format, or nothing).
 
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 // The C ABI; also in the crate's own unit-test build, so `cargo test` covers it without the
