@@ -142,10 +142,10 @@ fn fastrak_model() -> FastrakSim {
     FastrakSim::new(cfg)
 }
 
-/// Two receivers, no extended-range transmitter, 115200 baud; RTS is not wired through a
-/// pseudo-terminal.
+/// Two receivers and an extended-range transmitter (the entry's default), 115200 baud; RTS
+/// is not wired through a pseudo-terminal.
 fn flock_model() -> FlockSim {
-    let mut cfg = flock_sim::SimConfig::new(2, false, 115_200);
+    let mut cfg = flock_sim::SimConfig::new(2, true, 115_200);
     cfg.rts_wired = false;
     FlockSim::new(cfg)
 }
@@ -236,8 +236,9 @@ fn first_byte(external: Option<(u16, PathBuf)>) {
             seen = log.len();
         }
     });
-    let (port, server, label) = match external {
+    let (port, server, label) = match &external {
         Some((port, _)) => {
+            let port = *port;
             println!(
                 "first-byte: simulator on {}; start the server on 127.0.0.1:{port} now",
                 path.display()
@@ -272,6 +273,14 @@ fn first_byte(external: Option<(u16, PathBuf)>) {
         tracker.mainloop().expect("client mainloop");
         if first_at.is_none() && !got.borrow().is_empty() {
             first_at = Some(start.elapsed());
+            if external.is_some() {
+                // For start-up times by hand: the other server's start is known in wall time.
+                let t = TimeVal::now();
+                println!(
+                    "first-byte: first pose at wall time {}.{:06}",
+                    t.sec, t.usec
+                );
+            }
         }
         let _ = tracker.connection().wait(Duration::from_millis(2));
     }
@@ -519,5 +528,8 @@ fn khz_loop() {
         stamps.len() as f64 / wall,
         (ticks1 - ticks0) as f64 / hz / wall * 100.0
     );
+    let backwards = intervals.iter().filter(|&&i| i < 0).count();
+    let bunched = intervals.iter().filter(|&&i| (0..200).contains(&i)).count();
     print_us("  report interval (sender timestamps)", intervals);
+    println!("  intervals < 0: {backwards}, 0-200 µs (catching up after a late wake): {bunched}");
 }
