@@ -18,6 +18,9 @@
 //! * `FIRST_BYTE_EXTERNAL=PORT FIRST_BYTE_TTY=PATH`: only the simulator (its pseudo-terminal
 //!   at PATH) and the client (to 127.0.0.1:PORT); start the other server, with a Fastrak
 //!   entry on PATH at 115200 baud, once the bench says the simulator runs.
+//! * `DEVICE_SIM=fastrak|flock FIRST_BYTE_TTY=PATH [DEVICE_SIM_SECONDS=N]`: only a simulator
+//!   (the Fastrak of `first-byte`, the Flock of `startup`) on PATH for N seconds (30), to
+//!   serve it with any server and read it with any client.
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
 //!   `-f FILE -NIC 127.0.0.1 PORT`, as `vrpn_server` does) instead of ours.
 
@@ -53,6 +56,15 @@ fn main() {
         .filter(|a| a != "--bench")
         .collect();
     let want = |part: &str| args.is_empty() || args.iter().any(|a| a == part);
+    if let Ok(kind) = std::env::var("DEVICE_SIM") {
+        let tty = std::env::var("FIRST_BYTE_TTY").expect("FIRST_BYTE_TTY: the simulator's path");
+        let secs = std::env::var("DEVICE_SIM_SECONDS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(30);
+        simulate(&kind, Path::new(&tty), Duration::from_secs(secs));
+        return;
+    }
     if let Ok(port) = std::env::var("FIRST_BYTE_EXTERNAL") {
         let port: u16 = port.parse().expect("FIRST_BYTE_EXTERNAL: a port number");
         let tty = std::env::var("FIRST_BYTE_TTY").expect("FIRST_BYTE_TTY: the simulator's path");
@@ -148,6 +160,18 @@ fn flock_model() -> FlockSim {
     let mut cfg = flock_sim::SimConfig::new(2, true, 115_200);
     cfg.rts_wired = false;
     FlockSim::new(cfg)
+}
+
+/// Only a simulator (`fastrak` or `flock`) on a pseudo-terminal at `path`, for `duration`:
+/// for reading our drivers with another implementation's client by hand.
+fn simulate(kind: &str, path: &Path, duration: Duration) {
+    let _sim = match kind {
+        "fastrak" => SimThread::start(path, fastrak_model, |_, _| {}),
+        "flock" => SimThread::start(path, flock_model, |_, _| {}),
+        _ => panic!("DEVICE_SIM: fastrak or flock, not {kind:?}"),
+    };
+    println!("{kind} simulator on {} for {duration:?}", path.display());
+    std::thread::sleep(duration);
 }
 
 // ------------------------------------------------------------------ the server thread
