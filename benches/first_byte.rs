@@ -24,8 +24,6 @@
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
 //!   `-f FILE -NIC 127.0.0.1 PORT`, as `vrpn_server` does) instead of ours.
 
-mod common;
-
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -81,6 +79,7 @@ fn main() {
     if want("khz") {
         khz_loop();
     }
+    let _ = std::fs::remove_dir_all(tty_dir());
 }
 
 // ------------------------------------------------------------------ the simulator thread
@@ -139,9 +138,14 @@ impl Drop for SimThread {
     }
 }
 
+/// This run's directory for pseudo-terminal links and files (removed at the end).
+fn tty_dir() -> PathBuf {
+    std::env::temp_dir().join(format!("vrpn-bench-{}", std::process::id()))
+}
+
 /// A fresh path for a simulator's pseudo-terminal link.
 fn tty_path(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vrpn-bench-{}", std::process::id()));
+    let dir = tty_dir();
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir.join(name)
 }
