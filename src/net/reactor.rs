@@ -194,7 +194,8 @@ impl Reactor {
     }
 
     /// Waits until something is ready, `deadline` passes (woken precisely through a timer,
-    /// not on the poll's millisecond grid) or `max` elapses. Returns whether data arrived.
+    /// not on the poll's millisecond grid) or `max` elapses. Returns whether data arrived on a
+    /// socket.
     pub fn wait(&self, deadline: Option<Instant>, max: Duration) -> io::Result<bool> {
         let mut timeout = max;
         if let Some(d) = deadline {
@@ -249,9 +250,11 @@ impl Reactor {
             let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
                 continue;
             };
-            // Only incoming data counts as activity: write-space events follow every send,
-            // and listeners are quiet.
-            any |= ev.is_readable() && !slot.quiet;
+            // Only incoming data on sockets counts as activity: write-space events follow
+            // every send, listeners are quiet, and serial bytes need no busy-polling (they
+            // carry the wake time; a loop spinning through the busy window on a shared
+            // machine gets preempted, and then stamps them late when it polls again).
+            any |= ev.is_readable() && !slot.quiet && !slot.timed;
             let timed = slot.timed;
             let r = &mut slot.ready;
             if ev.is_readable() || ev.is_read_closed() || ev.is_error() {
@@ -274,7 +277,20 @@ impl Reactor {
         self.inner.borrow().epoch
     }
 
-    /// True once since the last call if data arrived (for a server's busy-poll window).
+    /// True if a serial port (a registration with wake times) is readable and its owner has
+    /// not taken that yet: a loop must not block before its owner reads (edge-triggered,
+    /// the poll will not report it again).
+    pub fn timed_pending(&self) -> bool {
+        let inner = self.inner.borrow();
+        inner.timed > 0
+            && inner
+                .slots
+                .iter()
+                .any(|s| s.used && s.timed && s.ready.readable)
+    }
+
+    /// True once since the last call if data arrived on a socket (for a server's busy-poll
+    /// window).
     pub fn take_activity(&self) -> bool {
         std::mem::take(&mut self.inner.borrow_mut().activity)
     }
@@ -418,4 +434,54 @@ impl Timer {
         false
     }
     fn clear(&self) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::fd::AsRawFd;
+
+    /// Serial bytes are stamped with the wake time and leave the server loop's busy-poll
+    /// window alone; until the port's owner takes them they are pending, so the loop does
+    /// not block over them. Socket data is activity.
+    #[test]
+    fn serial_readiness_is_pending_not_activity() {
+        let r = Reactor::new().unwrap();
+        let (master, slave) = serialport::TTYPort::pair().unwrap();
+        let port = r
+            .register_fd(slave.as_raw_fd(), Interest::READABLE)
+            .unwrap();
+        let mut udp = mio::net::UdpSocket::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let to = udp.local_addr().unwrap();
+        let sock = r.register(&mut udp, Interest::READABLE).unwrap();
+
+        nix::unistd::write(master.as_raw_fd(), b"x").unwrap();
+        let start = Instant::now();
+        while !r.timed_pending() {
+            assert!(
+                start.elapsed() < Duration::from_secs(5),
+                "pty never readable"
+            );
+            r.wait(None, Duration::from_millis(50)).unwrap();
+        }
+        assert!(!r.take_activity(), "serial bytes counted as activity");
+        let ready = r.take(port);
+        assert!(ready.readable && ready.woke.is_some());
+        assert!(!r.timed_pending());
+
+        std::net::UdpSocket::bind("127.0.0.1:0")
+            .unwrap()
+            .send_to(b"y", to)
+            .unwrap();
+        let start = Instant::now();
+        while !r.take(sock).readable {
+            assert!(
+                start.elapsed() < Duration::from_secs(5),
+                "socket never readable"
+            );
+            r.wait(None, Duration::from_millis(50)).unwrap();
+        }
+        assert!(r.take_activity());
+        assert!(!r.timed_pending());
+    }
 }

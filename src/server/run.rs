@@ -99,9 +99,12 @@ impl ServerLoop {
         if reactor.take_activity() {
             self.last_activity = Some(now);
         }
-        if self
-            .last_activity
-            .is_some_and(|t| now.duration_since(t) < busy_window)
+        // A serial port that became readable during the pass's own poll (after its device
+        // read) is read by the next pass at once.
+        if reactor.timed_pending()
+            || self
+                .last_activity
+                .is_some_and(|t| now.duration_since(t) < busy_window)
         {
             // Keep polling without blocking: answers go out at spinning-server latency.
             reactor
