@@ -58,9 +58,12 @@ fn many_clients_receive_every_report() {
         t.on_pose(move |p| {
             let mut s = s.borrow_mut();
             s.total += 1;
-            s.last = p.time;
+            // The server's own stamp: every client translates it with its own clock estimate,
+            // so a report near the window's edge could fall inside for one client and outside
+            // for another by a few microseconds.
+            s.last = p.sender_time;
             if let Some((t0, t1)) = *w.borrow() {
-                if p.time >= t0 && p.time < t1 && (0..8).contains(&p.sensor) {
+                if p.sender_time >= t0 && p.sender_time < t1 && (0..8).contains(&p.sensor) {
                     s.in_window[p.sensor] += 1;
                 }
             }

@@ -106,7 +106,7 @@ fn start_and_collect(
     label: &str,
     cfg: &str,
     name: &str,
-    sensors: i32,
+    sensors: usize,
     extra: &dyn Fn(&str) -> Box<dyn Fn() -> bool>,
 ) -> f64 {
     let t0 = Now::read();
@@ -133,7 +133,7 @@ fn start_and_collect(
         pump_until(&pump, Duration::from_secs(15), &all_sensors),
         "{label}: sensors seen {:?}; server said: {}",
         {
-            let mut s: Vec<i32> = poses.borrow().iter().map(|p| p.sensor).collect();
+            let mut s: Vec<usize> = poses.borrow().iter().map(|p| p.sensor).collect();
             s.dedup();
             s
         },
