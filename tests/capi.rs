@@ -165,7 +165,14 @@ fn compile(source: &str, out: &Path, link: Link) {
 
 /// Runs a program to its end (it has its own deadline) and returns its standard output.
 fn run(program: &Path, args: &[&str]) -> String {
-    let o = Command::new(program).args(args).output().unwrap();
+    // cargo points LD_LIBRARY_PATH at its own output folders, which it searches before the
+    // program's run path: a libvrpn.so another build left there (maturin's, with Python in it)
+    // must not stand in for the one just built.
+    let o = Command::new(program)
+        .args(args)
+        .env_remove("LD_LIBRARY_PATH")
+        .output()
+        .unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
         o.status.success(),
@@ -276,6 +283,7 @@ fn c_tracker_client_reads_static_c_server() {
         .unwrap_or_else(|| panic!("no port in {first:?}"));
     let out = Command::new(&client)
         .args([&format!("Tracker0@127.0.0.1:{port}"), "50", "10"])
+        .env_remove("LD_LIBRARY_PATH")
         .output()
         .unwrap();
     let _ = child.kill();
