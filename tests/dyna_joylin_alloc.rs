@@ -2,95 +2,22 @@
 //! global allocator around every driver call while the simulators stream through them, with
 //! reads split at random points and damage on the line.
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use vrpn::drivers::dyna::sim::{DynaSim, SimConfig};
 use vrpn::drivers::dyna::DynaDriver;
 use vrpn::drivers::joylin::sim::{JoystickSim, SimConfig as JoySimConfig};
 use vrpn::drivers::joylin::JoylinDriver;
 use vrpn::serial::testing::VirtualLine;
-use vrpn::serial::{PortKind, PortOps, SerialDriver};
+
 use vrpn::server::config::{parse_str, DeviceConfig};
-use vrpn::{AnalogRemote, ButtonRemote, Connection, Now, TimeVal, TrackerRemote};
+use vrpn::{AnalogRemote, ButtonRemote, Connection, TrackerRemote};
 
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_alloc() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_alloc();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn counted<T>(f: impl FnOnce() -> T) -> T {
-    ENABLED.with(|e| e.set(true));
-    let out = f();
-    ENABLED.with(|e| e.set(false));
-    out
-}
-
-/// Counts allocations made inside the wrapped driver's calls only (the simulator and the
-/// virtual line allocate freely).
-struct Counted<D>(D);
-
-impl<D: SerialDriver> SerialDriver for Counted<D> {
-    fn name(&self) -> &str {
-        self.0.name()
-    }
-    fn port_kind(&self) -> PortKind {
-        self.0.port_kind()
-    }
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
-        self.0.opened(now, port)
-    }
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        counted(|| self.0.received(bytes, arrived, port))
-    }
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        counted(|| self.0.poll(now, port))
-    }
-    fn next_deadline(&self) -> Option<Instant> {
-        counted(|| self.0.next_deadline())
-    }
-    fn closed(&mut self, now: Now) {
-        self.0.closed(now)
-    }
-}
-
-fn start() -> Now {
-    Now {
-        mono: Instant::now(),
-        wall: TimeVal::new(1_700_000_000, 0),
-    }
-}
+#[path = "common/counted_driver.rs"]
+mod counted_driver;
+use counted_driver::{start, Counted, COUNT};
 
 #[test]
 fn dynasight_streams_without_allocating() {
