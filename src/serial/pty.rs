@@ -13,8 +13,11 @@ use std::os::fd::{AsRawFd, RawFd};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use nix::fcntl::{fcntl, FcntlArg, FdFlag, OFlag};
-use serialport::{SerialPort, TTYPort};
+use std::os::unix::fs::OpenOptionsExt;
+
+use nix::fcntl::OFlag;
+use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
+use nix::sys::termios;
 
 use super::testing::DeviceModel;
 use crate::time::Now;
@@ -24,32 +27,34 @@ fn errno(e: nix::errno::Errno) -> io::Error {
 }
 
 struct Pty {
-    master: TTYPort,
+    master: PtyMaster,
     /// Kept open so the master never reads EIO while no driver has the slave open.
-    _slave: TTYPort,
+    _slave: std::fs::File,
     slave_path: PathBuf,
 }
 
 fn open_pty() -> io::Result<Pty> {
+    // Both ends are opened close-on-exec in the same call that makes them, so a program a
+    // test starts meanwhile (a server, perhaps for another test on another thread) never
+    // inherits a copy: a copy of the master would keep the line up after an unplug, and the
+    // server would never see it go.
+    let master =
+        posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC | OFlag::O_NONBLOCK)
+            .map_err(errno)?;
+    grantpt(&master).map_err(errno)?;
+    unlockpt(&master).map_err(errno)?;
+    let slave_path = PathBuf::from(ptsname_r(&master).map_err(errno)?);
+    // std opens files close-on-exec.
+    let slave = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::libc::O_NOCTTY)
+        .open(&slave_path)?;
     // The slave starts in raw mode, so nothing the simulator writes is changed before a
     // driver opens it (the serial layer sets raw mode again when it does).
-    let (master, slave) = TTYPort::pair().map_err(|e| io::Error::other(e.description))?;
-    let slave_path = slave
-        .name()
-        .map(PathBuf::from)
-        .ok_or_else(|| io::Error::other("the pseudo-terminal has no name"))?;
-    // Close-on-exec, so a program the test starts later (a server) holds no copy: a copy of
-    // the master would keep the line up after an unplug, and the server would never see it go.
-    for fd in [master.as_raw_fd(), slave.as_raw_fd()] {
-        fcntl(fd, FcntlArg::F_SETFD(FdFlag::FD_CLOEXEC)).map_err(errno)?;
-    }
-    let fd = master.as_raw_fd();
-    let flags = fcntl(fd, FcntlArg::F_GETFL).map_err(errno)?;
-    fcntl(
-        fd,
-        FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK),
-    )
-    .map_err(errno)?;
+    let mut mode = termios::tcgetattr(slave.as_raw_fd()).map_err(errno)?;
+    termios::cfmakeraw(&mut mode);
+    termios::tcsetattr(slave.as_raw_fd(), termios::SetArg::TCSANOW, &mode).map_err(errno)?;
     Ok(Pty {
         master,
         _slave: slave,
@@ -198,5 +203,39 @@ impl<M: DeviceModel> PtyDevice<M> {
 impl<M: DeviceModel> Drop for PtyDevice<M> {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.link);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nix::fcntl::{fcntl, FcntlArg, FdFlag};
+
+    #[test]
+    fn both_ends_are_close_on_exec_and_the_master_never_blocks() {
+        let pty = open_pty().unwrap();
+        for fd in [pty.master.as_raw_fd(), pty._slave.as_raw_fd()] {
+            let flags = FdFlag::from_bits_truncate(fcntl(fd, FcntlArg::F_GETFD).unwrap());
+            assert!(flags.contains(FdFlag::FD_CLOEXEC), "fd {fd}: {flags:?}");
+        }
+        let fl =
+            OFlag::from_bits_truncate(fcntl(pty.master.as_raw_fd(), FcntlArg::F_GETFL).unwrap());
+        assert!(fl.contains(OFlag::O_NONBLOCK));
+        // A byte written on the slave reaches the master unchanged (raw mode).
+        nix::unistd::write(pty._slave.as_raw_fd(), b"\r\n\x03").unwrap();
+        let mut buf = [0u8; 8];
+        let mut got = Vec::new();
+        for _ in 0..100 {
+            match nix::unistd::read(pty.master.as_raw_fd(), &mut buf) {
+                Ok(n) => got.extend_from_slice(&buf[..n]),
+                Err(nix::errno::Errno::EAGAIN) => {}
+                Err(e) => panic!("{e}"),
+            }
+            if got.len() >= 3 {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        assert_eq!(got, b"\r\n\x03");
     }
 }
