@@ -16,6 +16,10 @@
 //! Values have six decimals. A client that joined late sees a contiguous run of these lines
 //! (per kind); over UDP, low-latency reports may be missing.
 //!
+//! With `DEVICE_SIM_MUTE=S` (not for `fastrak` and `flock`), the device neither answers nor
+//! streams for its first S seconds: the driver's reset fails and is retried, and a client that
+//! connected early hears the server's texts about it.
+//!
 //! Entries to serve each simulator with (`PATH` is `FIRST_BYTE_TTY`):
 //!
 //! | `DEVICE_SIM` | vrpn.cfg line |
@@ -30,7 +34,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use vrpn::drivers::cerealbox::record::revolutions;
 use vrpn::drivers::cerealbox::sim::{self as cereal_sim, CerealSim};
@@ -40,8 +44,52 @@ use vrpn::drivers::joylin::sim::{self as joy_sim, JoystickSim};
 use vrpn::drivers::magellan::record::{axis_value, RESET_NULL_RADIUS};
 use vrpn::drivers::magellan::sim::{self as magellan_sim, MagellanSim, Sent};
 use vrpn::serial::pty::PtyDevice;
+use vrpn::serial::testing::DeviceModel;
+use vrpn::Now;
 
 use super::{fastrak_model, flock_model, SimThread};
+
+/// A device that can be made silent.
+trait Quiet: DeviceModel {
+    fn quiet(&mut self, on: bool);
+}
+
+impl Quiet for MagellanSim {
+    fn quiet(&mut self, on: bool) {
+        self.set_silent(on);
+    }
+}
+
+impl Quiet for CerealSim {
+    fn quiet(&mut self, on: bool) {
+        self.set_silent(on);
+    }
+}
+
+impl Quiet for DynaSim {
+    fn quiet(&mut self, on: bool) {
+        self.mute = on;
+    }
+}
+
+impl Quiet for JoystickSim {
+    fn quiet(&mut self, on: bool) {
+        self.mute = on;
+    }
+}
+
+/// `model`, silent from the start (it speaks once [`unmute`] has seen its time pass).
+fn muted<M: Quiet>(mut model: M) -> M {
+    model.quiet(true);
+    model
+}
+
+/// Lets the device speak from `until` on.
+fn unmute<M: Quiet>(dev: &mut PtyDevice<M>, now: Now, until: Instant) {
+    if now.mono >= until {
+        dev.model.quiet(false);
+    }
+}
 
 /// Axes and buttons of the simulated joystick.
 const JOY_AXES: u8 = 6;
@@ -49,10 +97,17 @@ const JOY_BUTTONS: u8 = 10;
 
 /// Runs simulator `kind` on a pseudo-terminal at `path` for `duration`, then writes the
 /// expected reports to `expect` if given.
-pub fn simulate(kind: &str, path: &Path, duration: Duration, expect: Option<&Path>) {
+pub fn simulate(
+    kind: &str,
+    path: &Path,
+    duration: Duration,
+    expect: Option<&Path>,
+    mute: Duration,
+) {
     let lines: Arc<Mutex<Vec<String>>> = Arc::default();
     let out = lines.clone();
     let emit = move |new: Vec<String>| out.lock().expect("expectation lines").extend(new);
+    let until = Instant::now() + mute;
     let _sim = match kind {
         "fastrak" => SimThread::start(path, fastrak_model, |_, _| {}),
         "flock" => SimThread::start(path, flock_model, |_, _| {}),
@@ -60,16 +115,22 @@ pub fn simulate(kind: &str, path: &Path, duration: Duration, expect: Option<&Pat
             let mut state = MagellanExpect::default();
             SimThread::start(
                 path,
-                || MagellanSim::new(magellan_sim::SimConfig::default()),
-                move |dev, _| emit(state.feed(dev)),
+                || muted(MagellanSim::new(magellan_sim::SimConfig::default())),
+                move |dev, now| {
+                    unmute(dev, now, until);
+                    emit(state.feed(dev))
+                },
             )
         }
         "cerealbox" => {
             let mut state = CerealExpect::default();
             SimThread::start(
                 path,
-                || CerealSim::new(cereal_sim::SimConfig::default()),
-                move |dev, _| emit(state.feed(dev)),
+                || muted(CerealSim::new(cereal_sim::SimConfig::default())),
+                move |dev, now| {
+                    unmute(dev, now, until);
+                    emit(state.feed(dev))
+                },
             )
         }
         "dyna" => {
@@ -77,9 +138,10 @@ pub fn simulate(kind: &str, path: &Path, duration: Duration, expect: Option<&Pat
             let model = || {
                 let mut cfg = dyna_sim::SimConfig::new(19_200);
                 cfg.keep_log = true;
-                DynaSim::new(cfg)
+                muted(DynaSim::new(cfg))
             };
-            SimThread::start(path, model, move |dev, _| {
+            SimThread::start(path, model, move |dev, now| {
+                unmute(dev, now, until);
                 emit(dyna_expect(dev, &mut seen));
             })
         }
@@ -88,9 +150,12 @@ pub fn simulate(kind: &str, path: &Path, duration: Duration, expect: Option<&Pat
             let model = || {
                 let mut cfg = joy_sim::SimConfig::new(JOY_AXES, JOY_BUTTONS);
                 cfg.keep_log = true;
-                JoystickSim::new(cfg)
+                muted(JoystickSim::new(cfg))
             };
-            SimThread::start(path, model, move |dev, _| emit(state.feed(dev)))
+            SimThread::start(path, model, move |dev, now| {
+                unmute(dev, now, until);
+                emit(state.feed(dev))
+            })
         }
         _ => {
             panic!("DEVICE_SIM: fastrak, flock, magellan, cerealbox, dyna or joylin, not {kind:?}")

@@ -21,8 +21,8 @@
 //! * `DEVICE_SIM=KIND FIRST_BYTE_TTY=PATH [DEVICE_SIM_SECONDS=N] [DEVICE_SIM_EXPECT=FILE]`:
 //!   only a simulator on PATH for N seconds (30), to serve it with any server and read it
 //!   with any client: `fastrak` (as in `first-byte`), `flock` (as in `startup`), `magellan`,
-//!   `cerealbox`, `dyna` or `joylin`; FILE gets what a client must have received (see
-//!   `device_sim.rs`).
+//!   `cerealbox`, `dyna` or `joylin`; FILE gets what a client must have received, and
+//!   `DEVICE_SIM_MUTE=S` keeps the device silent for its first S seconds (see `device_sim.rs`).
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
 //!   `-f FILE -NIC 127.0.0.1 PORT`, as `vrpn_server` does) instead of ours.
 
@@ -65,11 +65,15 @@ fn main() {
             .and_then(|v| v.parse().ok())
             .unwrap_or(30);
         let expect = std::env::var_os("DEVICE_SIM_EXPECT").map(PathBuf::from);
+        let mute: f64 = std::env::var("DEVICE_SIM_MUTE")
+            .map(|v| v.parse().expect("DEVICE_SIM_MUTE: seconds"))
+            .unwrap_or(0.0);
         device_sim::simulate(
             &kind,
             Path::new(&tty),
             Duration::from_secs(secs),
             expect.as_deref(),
+            Duration::from_secs_f64(mute),
         );
         return;
     }
@@ -106,7 +110,7 @@ impl SimThread {
     fn start<M: DeviceModel + 'static>(
         path: &Path,
         model: impl FnOnce() -> M + Send + 'static,
-        mut observe: impl FnMut(&PtyDevice<M>, Now) + Send + 'static,
+        mut observe: impl FnMut(&mut PtyDevice<M>, Now) + Send + 'static,
     ) -> SimThread {
         let stop = Arc::new(AtomicBool::new(false));
         let s = stop.clone();
@@ -126,7 +130,7 @@ impl SimThread {
                 let _ = poll(&mut fds, wait);
                 let now = Now::read();
                 dev.step(now).expect("simulator step");
-                observe(&dev, now);
+                observe(&mut dev, now);
             }
         });
         ready_rx
