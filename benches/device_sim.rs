@@ -25,7 +25,7 @@
 //! | `DEVICE_SIM` | vrpn.cfg line |
 //! |---|---|
 //! | `fastrak` | `vrpn_Tracker_Fastrak Tracker0 PATH 115200` |
-//! | `flock` | `vrpn_Tracker_Flock Tracker0 2 PATH 115200 1 Y` |
+//! | `flock` | `vrpn_Tracker_Flock Tracker0 2 PATH 115200 0` |
 //! | `magellan` | `vrpn_Magellan Magellan0 PATH 9600` |
 //! | `cerealbox` | `vrpn_CerealBox Cereal0 PATH 19200 24 8 8` |
 //! | `dyna` | `vrpn_Tracker_Dyna Dyna0 1 PATH 19200` |
