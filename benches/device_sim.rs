@@ -20,6 +20,11 @@
 //! streams for its first S seconds: the driver's reset fails and is retried, and a client that
 //! connected early hears the server's texts about it.
 //!
+//! With `DEVICE_SIM_REST=S` (`magellan` only), the puck rests for the first S seconds, so
+//! that the device sends nothing but its answers during a reset; the simulator's puck
+//! otherwise moves all the time, which C++'s Magellan driver (not this crate's) cannot reset
+//! through.
+//!
 //! Entries to serve each simulator with (`PATH` is `FIRST_BYTE_TTY`):
 //!
 //! | `DEVICE_SIM` | vrpn.cfg line |
@@ -103,11 +108,13 @@ pub fn simulate(
     duration: Duration,
     expect: Option<&Path>,
     mute: Duration,
+    rest: Duration,
 ) {
     let lines: Arc<Mutex<Vec<String>>> = Arc::default();
     let out = lines.clone();
     let emit = move |new: Vec<String>| out.lock().expect("expectation lines").extend(new);
     let until = Instant::now() + mute;
+    let rest_until = Instant::now() + rest;
     let _sim = match kind {
         "fastrak" => SimThread::start(path, fastrak_model, |_, _| {}),
         "flock" => SimThread::start(path, flock_model, |_, _| {}),
@@ -118,6 +125,7 @@ pub fn simulate(
                 || muted(MagellanSim::new(magellan_sim::SimConfig::default())),
                 move |dev, now| {
                     unmute(dev, now, until);
+                    dev.model.set_moving(now.mono >= rest_until, now);
                     emit(state.feed(dev))
                 },
             )

@@ -22,7 +22,8 @@
 //!   only a simulator on PATH for N seconds (30), to serve it with any server and read it
 //!   with any client: `fastrak` (as in `first-byte`), `flock` (as in `startup`), `magellan`,
 //!   `cerealbox`, `dyna` or `joylin`; FILE gets what a client must have received, and
-//!   `DEVICE_SIM_MUTE=S` keeps the device silent for its first S seconds (see `device_sim.rs`).
+//!   `DEVICE_SIM_MUTE=S` keeps the device silent for its first S seconds, `DEVICE_SIM_REST=S`
+//!   the Magellan's puck still (see `device_sim.rs`).
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
 //!   `-f FILE -NIC 127.0.0.1 PORT`, as `vrpn_server` does) instead of ours.
 
@@ -68,12 +69,16 @@ fn main() {
         let mute: f64 = std::env::var("DEVICE_SIM_MUTE")
             .map(|v| v.parse().expect("DEVICE_SIM_MUTE: seconds"))
             .unwrap_or(0.0);
+        let rest: f64 = std::env::var("DEVICE_SIM_REST")
+            .map(|v| v.parse().expect("DEVICE_SIM_REST: seconds"))
+            .unwrap_or(0.0);
         device_sim::simulate(
             &kind,
             Path::new(&tty),
             Duration::from_secs(secs),
             expect.as_deref(),
             Duration::from_secs_f64(mute),
+            Duration::from_secs_f64(rest),
         );
         return;
     }
