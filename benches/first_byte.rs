@@ -18,9 +18,12 @@
 //! * `FIRST_BYTE_EXTERNAL=PORT FIRST_BYTE_TTY=PATH`: only the simulator (its pseudo-terminal
 //!   at PATH) and the client (to 127.0.0.1:PORT); start the other server, with a Fastrak
 //!   entry on PATH at 115200 baud, once the bench says the simulator runs.
-//! * `DEVICE_SIM=fastrak|flock FIRST_BYTE_TTY=PATH [DEVICE_SIM_SECONDS=N]`: only a simulator
-//!   (the Fastrak of `first-byte`, the Flock of `startup`) on PATH for N seconds (30), to
-//!   serve it with any server and read it with any client.
+//! * `DEVICE_SIM=KIND FIRST_BYTE_TTY=PATH [DEVICE_SIM_SECONDS=N] [DEVICE_SIM_EXPECT=FILE]`:
+//!   only a simulator on PATH for N seconds (30), to serve it with any server and read it
+//!   with any client: `fastrak` (as in `first-byte`), `flock` (as in `startup`), `magellan`,
+//!   `cerealbox`, `dyna` or `joylin`; FILE gets what a client must have received, and
+//!   `DEVICE_SIM_MUTE=S` keeps the device silent for its first S seconds, `DEVICE_SIM_REST=S`
+//!   the Magellan's puck still (see `device_sim.rs`).
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
 //!   `-f FILE -NIC 127.0.0.1 PORT`, as `vrpn_server` does) instead of ours.
 
@@ -32,6 +35,8 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+
+mod device_sim;
 
 use nix::poll::{poll, PollFd, PollFlags};
 use vrpn::drivers::fastrak::record::METRES_PER_INCH;
@@ -60,7 +65,21 @@ fn main() {
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(30);
-        simulate(&kind, Path::new(&tty), Duration::from_secs(secs));
+        let expect = std::env::var_os("DEVICE_SIM_EXPECT").map(PathBuf::from);
+        let mute: f64 = std::env::var("DEVICE_SIM_MUTE")
+            .map(|v| v.parse().expect("DEVICE_SIM_MUTE: seconds"))
+            .unwrap_or(0.0);
+        let rest: f64 = std::env::var("DEVICE_SIM_REST")
+            .map(|v| v.parse().expect("DEVICE_SIM_REST: seconds"))
+            .unwrap_or(0.0);
+        device_sim::simulate(
+            &kind,
+            Path::new(&tty),
+            Duration::from_secs(secs),
+            expect.as_deref(),
+            Duration::from_secs_f64(mute),
+            Duration::from_secs_f64(rest),
+        );
         return;
     }
     if let Ok(port) = std::env::var("FIRST_BYTE_EXTERNAL") {
@@ -96,7 +115,7 @@ impl SimThread {
     fn start<M: DeviceModel + 'static>(
         path: &Path,
         model: impl FnOnce() -> M + Send + 'static,
-        mut observe: impl FnMut(&PtyDevice<M>, Now) + Send + 'static,
+        mut observe: impl FnMut(&mut PtyDevice<M>, Now) + Send + 'static,
     ) -> SimThread {
         let stop = Arc::new(AtomicBool::new(false));
         let s = stop.clone();
@@ -116,7 +135,7 @@ impl SimThread {
                 let _ = poll(&mut fds, wait);
                 let now = Now::read();
                 dev.step(now).expect("simulator step");
-                observe(&dev, now);
+                observe(&mut dev, now);
             }
         });
         ready_rx
@@ -164,18 +183,6 @@ fn flock_model() -> FlockSim {
     let mut cfg = flock_sim::SimConfig::new(2, true, 115_200);
     cfg.rts_wired = false;
     FlockSim::new(cfg)
-}
-
-/// Only a simulator (`fastrak` or `flock`) on a pseudo-terminal at `path`, for `duration`:
-/// for reading our drivers with another implementation's client by hand.
-fn simulate(kind: &str, path: &Path, duration: Duration) {
-    let _sim = match kind {
-        "fastrak" => SimThread::start(path, fastrak_model, |_, _| {}),
-        "flock" => SimThread::start(path, flock_model, |_, _| {}),
-        _ => panic!("DEVICE_SIM: fastrak or flock, not {kind:?}"),
-    };
-    println!("{kind} simulator on {} for {duration:?}", path.display());
-    std::thread::sleep(duration);
 }
 
 // ------------------------------------------------------------------ the server thread
