@@ -8,7 +8,8 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
-use vrpn::{Connection, SenderFilter, TimeVal};
+use vrpn::connection::{ClockSyncConfig, ConnectionOptions};
+use vrpn::{Connection, Limits, SenderFilter, TimeVal};
 
 /// How far ahead the server's clock reads.
 const SHIFT: f64 = 7.25;
@@ -24,7 +25,11 @@ struct Seen {
     arrived: TimeVal,
 }
 
+/// One test at a time: each runs a server and measures latencies on a 2-core machine.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn poses_through(location: &str) {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let server = common::start_server_with(
         "vrpn_Tracker_NULL Tracker0 1 200\n",
         0,
@@ -34,7 +39,23 @@ fn poses_through(location: &str) {
         "Tracker0@{}",
         location.replace("PORT", &server.port.to_string())
     );
-    let conn = Connection::open(&name).unwrap();
+    // Re-sync rounds every second of 4 queries: on a loaded 2-core machine the quick round may
+    // see only slow exchanges (a 2 ms round trip gives a ±1 ms bound); more rounds soon find a
+    // fast one, and the estimate keeps the best.
+    let sync = ClockSyncConfig {
+        resync_interval: Duration::from_millis(1000),
+        resync_queries: 4,
+        ..ClockSyncConfig::default()
+    };
+    let options = ConnectionOptions {
+        limits: Some(Limits {
+            clock_sync: Some(sync),
+            ..Limits::default()
+        }),
+        private: true,
+        ..ConnectionOptions::default()
+    };
+    let conn = Connection::open_with(&name, &options).unwrap();
     let pos_quat = conn.register_type("vrpn_Tracker Pos_Quat").unwrap();
     let tracker = conn.register_sender("Tracker0").unwrap();
     let seen: Rc<RefCell<Vec<Seen>>> = Rc::default();
@@ -48,11 +69,9 @@ fn poses_through(location: &str) {
         });
     });
 
-    // The first reply puts sync in effect; the rest of the quick round (8 exchanges) narrows
-    // the bound below the 0.5 ms on an idle loopback.
     common::pump_until(
         &conn,
-        Duration::from_secs(15),
+        Duration::from_secs(20),
         "clock sync within 0.5 ms",
         || conn.clock_estimate().is_some_and(|e| e.uncertainty < BOUND),
     );
@@ -96,7 +115,9 @@ fn poses_through(location: &str) {
     // the microsecond truncation of both stamps), and the typical one lands within 0.5 ms.
     // (Every sample within 0.5 ms would make the test depend on the scheduling of a loaded
     // 2-core CI machine; the median does not.)
-    let ahead = estimate.uncertainty + 5e-6;
+    // The stated bound grows with the estimate's age (the drift is not known yet).
+    let later = conn.clock_estimate().unwrap();
+    let ahead = estimate.uncertainty.max(later.uncertainty) + 5e-6;
     assert!(
         lateness.iter().all(|&l| l > -ahead),
         "{name}: a translated time lies more than {ahead} s ahead of its arrival: {:?}",
@@ -123,6 +144,7 @@ fn a_shifted_server_clock_is_translated_on_the_tcp_path() {
 /// format says when the server's clock becomes known.
 #[test]
 fn print_devices_shows_the_offset_and_both_times() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let server = common::start_server_with(
         "vrpn_Tracker_NULL Tracker0 1 50\n",
         0,
