@@ -3,10 +3,10 @@
 //!
 //! A test and simulation tool. It never blocks and never sleeps: the caller runs
 //! [`PtyDevice::step`] from its own loop (a test thread, or the `DEVICE_SIM` mode of
-//! `benches/first_byte.rs`), waiting on [`PtyDevice::master_fd`] and [`PtyDevice::next_deadline`] in between. The
-//! device can be unplugged and plugged back under the same path (a symbolic link that is
-//! pointed at a fresh pseudo-terminal), which is how the tests check that a server reopens a
-//! port that vanished.
+//! `benches/first_byte.rs`), waiting on [`PtyDevice::master_fd`] and
+//! [`PtyDevice::next_deadline`] in between. The device can be unplugged and plugged back under
+//! the same path (a symbolic link that is pointed at a fresh pseudo-terminal), which is how the
+//! tests check that a server reopens a port that vanished.
 
 use std::io;
 use std::os::fd::{AsRawFd, RawFd};
