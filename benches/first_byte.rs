@@ -524,7 +524,7 @@ fn khz_loop() {
     let tracker = TrackerRemote::new(&format!("T@127.0.0.1:{port}")).expect("client");
     let stamps: Rc<RefCell<Vec<TimeVal>>> = Rc::default();
     let s = stamps.clone();
-    tracker.on_pose(move |p| s.borrow_mut().push(p.time));
+    tracker.on_pose(move |p| s.borrow_mut().push(p.sender_time));
     let start = Instant::now();
     while stamps.borrow().is_empty() {
         assert!(
