@@ -374,6 +374,12 @@ fn fastrak_survives_garbage_silence_and_unplugging() {
     );
     let silent_poses = c.count();
     sim.with(|d| d.model.inner.set_silent(false));
+    let woke = Instant::now();
+    c.wait_poses(silent_poses + 1, Duration::from_secs(8), "after silence");
+    eprintln!(
+        "Fastrak: first pose {:.0} ms after the tracker woke",
+        woke.elapsed().as_secs_f64() * 1e3
+    );
     c.wait_poses(silent_poses + 40, Duration::from_secs(8), "after silence");
     check_fastrak(
         &c,
@@ -393,6 +399,12 @@ fn fastrak_survives_garbage_silence_and_unplugging() {
     c.pump_until(Duration::from_millis(300), |_| false);
     assert_eq!(c.count(), unplugged, "poses while unplugged");
     sim.with(|d| d.plug()).unwrap();
+    let plugged = Instant::now();
+    c.wait_poses(unplugged + 1, Duration::from_secs(6), "after plugging back");
+    eprintln!(
+        "Fastrak: first pose {:.0} ms after plugging back",
+        plugged.elapsed().as_secs_f64() * 1e3
+    );
     c.wait_poses(
         unplugged + 40,
         Duration::from_secs(6),
@@ -496,6 +508,7 @@ fn flock_survives_garbage_silence_and_unplugging() {
     // A hung device: the watchdog resets it, and records resume by themselves.
     let texts_before = c.texts.borrow().len();
     let logged = flock_sent(&sim).len();
+    let stalled_at = Instant::now();
     sim.with(|d| d.model.inner.stall());
     c.wait_text(
         texts_before,
@@ -503,6 +516,11 @@ fn flock_survives_garbage_silence_and_unplugging() {
         Duration::from_secs(5),
     );
     let stalled = c.count();
+    c.wait_poses(stalled + 1, Duration::from_secs(8), "after the reset");
+    eprintln!(
+        "Flock: first pose {:.0} ms after the line stalled",
+        stalled_at.elapsed().as_secs_f64() * 1e3
+    );
     c.wait_poses(stalled + 100, Duration::from_secs(8), "after the reset");
     check_flock(
         &c,
@@ -523,6 +541,12 @@ fn flock_survives_garbage_silence_and_unplugging() {
     c.pump_until(Duration::from_millis(300), |_| false);
     assert_eq!(c.count(), unplugged, "poses while unplugged");
     sim.with(|d| d.plug()).unwrap();
+    let plugged = Instant::now();
+    c.wait_poses(unplugged + 1, Duration::from_secs(6), "after plugging back");
+    eprintln!(
+        "Flock: first pose {:.0} ms after plugging back",
+        plugged.elapsed().as_secs_f64() * 1e3
+    );
     c.wait_poses(
         unplugged + 100,
         Duration::from_secs(6),
