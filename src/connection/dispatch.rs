@@ -202,6 +202,7 @@ impl HandlerTable {
     }
 
     /// True when some handler could want messages of this type (lets senders skip work).
+    #[inline]
     pub(crate) fn has_handlers(&self, type_id: TypeId) -> bool {
         !self.any_type.borrow().is_empty()
             || self

@@ -8,8 +8,14 @@
 //!
 //! Readiness is edge-triggered (mio registers sockets that way): an owner keeps reading until
 //! `WouldBlock` (or a short read, which proves a stream empty) before it waits again.
+//!
+//! Sockets get their readiness as [`ReadyBits`] shared with the reactor: a poll sets the bits
+//! and the owner clears them when a call proves them stale, so a loop pass asks a socket
+//! "readable?" with one load, not a lookup in the reactor (that walk cost a borrow and a slot
+//! lookup per socket per pass). Serial ports [`take`](Reactor::take) theirs, with the wake
+//! time.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::io;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
@@ -38,6 +44,51 @@ pub struct Ready {
     pub woke: Option<Now>,
 }
 
+/// Readiness of one socket, shared by the reactor (which sets bits when a poll reports them)
+/// and the socket's owner (which clears a bit when a call on the socket proves it stale).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ReadyBits(Rc<Cell<u8>>);
+
+impl ReadyBits {
+    /// Data (or a connection, or an error) can be read.
+    pub(crate) const READABLE: u8 = 1;
+    /// Room to write (or a connect completed).
+    pub(crate) const WRITABLE: u8 = 2;
+    /// The peer closed its side, or the socket failed: read to the end.
+    pub(crate) const READ_CLOSED: u8 = 4;
+
+    /// Bits starting as `bits`.
+    pub(crate) fn new(bits: u8) -> ReadyBits {
+        ReadyBits(Rc::new(Cell::new(bits)))
+    }
+
+    #[inline]
+    pub(crate) fn readable(&self) -> bool {
+        self.0.get() & Self::READABLE != 0
+    }
+
+    #[inline]
+    pub(crate) fn writable(&self) -> bool {
+        self.0.get() & Self::WRITABLE != 0
+    }
+
+    #[inline]
+    pub(crate) fn read_closed(&self) -> bool {
+        self.0.get() & Self::READ_CLOSED != 0
+    }
+
+    /// Clears `bits` (a call proved them stale).
+    #[inline]
+    pub(crate) fn clear(&self, bits: u8) {
+        self.0.set(self.0.get() & !bits);
+    }
+
+    #[inline]
+    fn set(&self, bits: u8) {
+        self.0.set(self.0.get() | bits);
+    }
+}
+
 #[derive(Default)]
 struct Slot {
     used: bool,
@@ -47,6 +98,8 @@ struct Slot {
     /// do not need the busy-poll latency that data does, and a flood of them must not keep a
     /// server spinning).
     quiet: bool,
+    /// Where a poll puts readiness: the owner's shared bits, or `ready` for [`Reactor::take`].
+    shared: Option<ReadyBits>,
     ready: Ready,
 }
 
@@ -56,11 +109,6 @@ struct Inner {
     timer: Option<Timer>,
     slots: Vec<Slot>,
     free: Vec<usize>,
-    /// Data arrived since the last [`Reactor::take_activity`].
-    activity: bool,
-    /// Counts polls that brought events: an owner that saw the same count last time has
-    /// nothing new to take.
-    epoch: u64,
     /// Registrations that want wake times (when none, a poll never reads the clock).
     timed: usize,
 }
@@ -68,12 +116,19 @@ struct Inner {
 /// A shared poll: see the module documentation.
 #[derive(Clone)]
 pub struct Reactor {
-    inner: Rc<RefCell<Inner>>,
+    inner: Rc<Shared>,
+}
+
+struct Shared {
+    state: RefCell<Inner>,
+    /// Data arrived since the last [`Reactor::take_activity`] (outside the `RefCell`: every
+    /// read that brings data notes it).
+    activity: Cell<bool>,
 }
 
 impl std::fmt::Debug for Reactor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let inner = self.inner.borrow();
+        let inner = self.inner.state.borrow();
         f.debug_struct("Reactor")
             .field("registered", &inner.slots.iter().filter(|s| s.used).count())
             .finish()
@@ -89,19 +144,21 @@ impl Reactor {
             used: true,
             timed: false,
             quiet: true,
+            shared: None,
             ready: Ready::default(),
         });
         Ok(Reactor {
-            inner: Rc::new(RefCell::new(Inner {
-                poll,
-                events: Events::with_capacity(256),
-                timer: None,
-                slots,
-                free: Vec::new(),
-                activity: false,
-                epoch: 0,
-                timed: 0,
-            })),
+            inner: Rc::new(Shared {
+                state: RefCell::new(Inner {
+                    poll,
+                    events: Events::with_capacity(256),
+                    timer: None,
+                    slots,
+                    free: Vec::new(),
+                    timed: 0,
+                }),
+                activity: Cell::new(false),
+            }),
         })
     }
 
@@ -122,6 +179,7 @@ impl Reactor {
             used: true,
             timed: false,
             quiet: false,
+            shared: None,
             ready: Ready::default(),
         };
         Token(i)
@@ -129,7 +187,7 @@ impl Reactor {
 
     /// Registers a socket (or any mio source) and returns its token.
     pub fn register(&self, source: &mut impl Source, interest: Interest) -> io::Result<Token> {
-        let mut inner = self.inner.borrow_mut();
+        let mut inner = self.inner.state.borrow_mut();
         let token = Self::alloc(&mut inner);
         if let Err(e) = inner.poll.registry().register(source, token, interest) {
             inner.slots[token.0].used = false;
@@ -147,7 +205,24 @@ impl Reactor {
         interest: Interest,
     ) -> io::Result<Token> {
         let token = self.register(source, interest)?;
-        self.inner.borrow_mut().slots[token.0].quiet = true;
+        self.inner.state.borrow_mut().slots[token.0].quiet = true;
+        Ok(token)
+    }
+
+    /// Registers a socket whose readiness a poll puts straight into `bits` (shared with its
+    /// owner, see [`ReadyBits`]); `quiet` as for [`register_quiet`](Self::register_quiet).
+    pub(crate) fn register_shared(
+        &self,
+        source: &mut impl Source,
+        interest: Interest,
+        quiet: bool,
+        bits: &ReadyBits,
+    ) -> io::Result<Token> {
+        let token = self.register(source, interest)?;
+        let mut inner = self.inner.state.borrow_mut();
+        let slot = &mut inner.slots[token.0];
+        slot.quiet = quiet;
+        slot.shared = Some(bits.clone());
         Ok(token)
     }
 
@@ -155,7 +230,7 @@ impl Reactor {
     /// carries the time the poll woke for it ([`Ready::woke`]).
     pub fn register_fd(&self, fd: std::os::fd::RawFd, interest: Interest) -> io::Result<Token> {
         let token = self.register(&mut mio::unix::SourceFd(&fd), interest)?;
-        let mut inner = self.inner.borrow_mut();
+        let mut inner = self.inner.state.borrow_mut();
         inner.slots[token.0].timed = true;
         inner.timed += 1;
         Ok(token)
@@ -163,11 +238,12 @@ impl Reactor {
 
     /// Forgets a registration; the token may be reused.
     pub fn deregister(&self, source: &mut impl Source, token: Token) {
-        let mut inner = self.inner.borrow_mut();
+        let mut inner = self.inner.state.borrow_mut();
         let _ = inner.poll.registry().deregister(source);
         if let Some(slot) = inner.slots.get_mut(token.0).filter(|s| s.used) {
             let timed = std::mem::take(&mut slot.timed);
             slot.used = false;
+            slot.shared = None;
             slot.ready = Ready::default();
             inner.free.push(token.0);
             inner.timed -= usize::from(timed);
@@ -181,7 +257,7 @@ impl Reactor {
 
     /// Takes (and clears) what the polls saw for `token` since the last call.
     pub fn take(&self, token: Token) -> Ready {
-        let mut inner = self.inner.borrow_mut();
+        let mut inner = self.inner.state.borrow_mut();
         match inner.slots.get_mut(token.0) {
             Some(s) if s.used => std::mem::take(&mut s.ready),
             _ => Ready::default(),
@@ -204,7 +280,7 @@ impl Reactor {
                 return self.poll_now();
             }
             if until < max {
-                let mut inner = self.inner.borrow_mut();
+                let mut inner = self.inner.state.borrow_mut();
                 if inner.timer.is_none() {
                     inner.timer = Timer::new(&inner.poll);
                 }
@@ -217,7 +293,7 @@ impl Reactor {
     }
 
     fn poll(&self, timeout: Option<Duration>) -> io::Result<bool> {
-        let mut inner = self.inner.borrow_mut();
+        let mut inner = self.inner.state.borrow_mut();
         let inner = &mut *inner;
         match inner.poll.poll(&mut inner.events, timeout) {
             Ok(()) => {}
@@ -227,7 +303,6 @@ impl Reactor {
         if inner.events.is_empty() {
             return Ok(false);
         }
-        inner.epoch += 1;
         // The time the poll woke, read only when a timed source (a serial port) is ready: the
         // arrival time of its first byte. Sockets do without it.
         let woke = (inner.timed > 0
@@ -250,6 +325,22 @@ impl Reactor {
             let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
                 continue;
             };
+            if let Some(bits) = &slot.shared {
+                let closed = ev.is_read_closed() || ev.is_error();
+                any |= ev.is_readable() && !slot.quiet;
+                bits.set(
+                    if ev.is_readable() || closed {
+                        ReadyBits::READABLE
+                    } else {
+                        0
+                    } | if ev.is_writable() || ev.is_error() {
+                        ReadyBits::WRITABLE
+                    } else {
+                        0
+                    } | if closed { ReadyBits::READ_CLOSED } else { 0 },
+                );
+                continue;
+            }
             // Only incoming data on sockets counts as activity: write-space events follow
             // every send, listeners are quiet, and serial bytes need no busy-polling (they
             // carry the wake time; a loop spinning through the busy window on a shared
@@ -267,21 +358,17 @@ impl Reactor {
             r.error |= ev.is_error();
             r.writable |= ev.is_writable() || ev.is_error();
         }
-        inner.activity |= any;
+        if any {
+            self.inner.activity.set(true);
+        }
         Ok(any)
-    }
-
-    /// A number that changes whenever a poll brings events (see [`take`](Self::take): while
-    /// it stays the same, every token's readiness is unchanged).
-    pub fn epoch(&self) -> u64 {
-        self.inner.borrow().epoch
     }
 
     /// True if a serial port (a registration with wake times) is readable and its owner has
     /// not taken that yet: a loop must not block before its owner reads (edge-triggered,
     /// the poll will not report it again).
     pub fn timed_pending(&self) -> bool {
-        let inner = self.inner.borrow();
+        let inner = self.inner.state.borrow();
         inner.timed > 0
             && inner
                 .slots
@@ -292,12 +379,13 @@ impl Reactor {
     /// True once since the last call if data arrived on a socket (for a server's busy-poll
     /// window).
     pub fn take_activity(&self) -> bool {
-        std::mem::take(&mut self.inner.borrow_mut().activity)
+        self.inner.activity.replace(false)
     }
 
     /// Notes that data arrived outside a poll (a read that found more than readiness said).
+    #[inline]
     pub(crate) fn note_activity(&self) {
-        self.inner.borrow_mut().activity = true;
+        self.inner.activity.set(true);
     }
 }
 
@@ -309,6 +397,8 @@ pub(crate) struct DeadlineTimer {
     timer: Timer,
     fd: std::os::fd::RawFd,
     token: Token,
+    /// The timer's readiness: readable once it fired.
+    fired: ReadyBits,
     reactor: Reactor,
     /// The deadline the timer is set for.
     armed: Option<Instant>,
@@ -321,13 +411,20 @@ impl DeadlineTimer {
     pub(crate) fn new(reactor: &Reactor) -> Option<DeadlineTimer> {
         let timer = Timer::unregistered()?;
         let fd = timer.fd();
+        let fired = ReadyBits::default();
         let token = reactor
-            .register_quiet(&mut mio::unix::SourceFd(&fd), Interest::READABLE)
+            .register_shared(
+                &mut mio::unix::SourceFd(&fd),
+                Interest::READABLE,
+                true,
+                &fired,
+            )
             .ok()?;
         Some(DeadlineTimer {
             timer,
             fd,
             token,
+            fired,
             reactor: reactor.clone(),
             armed: None,
             passed: false,
@@ -336,22 +433,29 @@ impl DeadlineTimer {
 
     /// Whether `deadline` has passed. The clock is read only when the deadline differs from
     /// the one the timer is set for (to set it); otherwise the poll's readiness answers.
+    #[inline]
     pub(crate) fn passed(&mut self, deadline: Instant, clock: &dyn TimeSource) -> bool {
         if self.armed != Some(deadline) {
-            // A new deadline: readiness left from the old one means nothing.
-            self.reactor.take(self.token);
-            let now = clock.now().mono;
-            self.passed = now >= deadline;
-            self.armed = Some(deadline);
-            if !self.passed && !self.timer.arm(deadline - now) {
-                // No timer after all: compare with the clock every time.
-                self.armed = None;
-            }
-            return self.passed;
+            return self.rearm(deadline, clock);
         }
-        if !self.passed && self.reactor.take(self.token).readable {
+        if !self.passed && self.fired.readable() {
+            self.fired.clear(ReadyBits::READABLE);
             self.timer.clear();
             self.passed = true;
+        }
+        self.passed
+    }
+
+    #[cold]
+    fn rearm(&mut self, deadline: Instant, clock: &dyn TimeSource) -> bool {
+        // A new deadline: readiness left from the old one means nothing.
+        self.fired.clear(ReadyBits::READABLE);
+        let now = clock.now().mono;
+        self.passed = now >= deadline;
+        self.armed = Some(deadline);
+        if !self.passed && !self.timer.arm(deadline - now) {
+            // No timer after all: compare with the clock every time.
+            self.armed = None;
         }
         self.passed
     }

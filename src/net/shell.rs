@@ -9,10 +9,10 @@ use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
 use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Interest, Token};
 
-use super::reactor::{DeadlineTimer, Reactor, Ready};
+use super::reactor::{DeadlineTimer, Reactor, ReadyBits};
 use super::sys::recv_datagrams;
 use crate::error::Error;
-use crate::proto::buffers::INBOX_SLOTS;
+use crate::proto::buffers::{DatagramQueue, INBOX_SLOTS};
 use crate::proto::{IoRequest, PeerId, Session};
 use crate::time::TimeSource;
 
@@ -30,11 +30,12 @@ const REQUESTS_PER_PASS: usize = 256;
 /// TCP connections accepted per pass.
 const ACCEPTS_PER_PASS: usize = 64;
 
-/// A socket with the readiness the shell knows about (sticky until a read proves it empty).
+/// A socket and its readiness: set by the reactor's polls, sticky until a call on the socket
+/// proves it stale.
 struct Sock<S> {
     sock: S,
     token: Token,
-    ready: Ready,
+    ready: ReadyBits,
 }
 
 impl<S: mio::event::Source> Sock<S> {
@@ -53,29 +54,10 @@ impl<S: mio::event::Source> Sock<S> {
         interest: Interest,
         quiet: bool,
     ) -> io::Result<Sock<S>> {
-        let token = if quiet {
-            reactor.register_quiet(&mut sock, interest)?
-        } else {
-            reactor.register(&mut sock, interest)?
-        };
-        Ok(Sock {
-            sock,
-            token,
-            ready: Ready {
-                readable: true,
-                writable: true,
-                ..Ready::default()
-            },
-        })
-    }
-
-    /// Merges what the polls saw since the last look.
-    fn refresh(&mut self, reactor: &Reactor) {
-        let r = reactor.take(self.token);
-        self.ready.readable |= r.readable;
-        self.ready.writable |= r.writable;
-        self.ready.read_closed |= r.read_closed;
-        self.ready.error |= r.error;
+        // Ready until a call says otherwise: an event may have come before registration.
+        let ready = ReadyBits::new(ReadyBits::READABLE | ReadyBits::WRITABLE);
+        let token = reactor.register_shared(&mut sock, interest, quiet, &ready)?;
+        Ok(Sock { sock, token, ready })
     }
 
     fn close(mut self, reactor: &Reactor) {
@@ -113,8 +95,8 @@ pub(crate) struct Shell {
     reactor: Option<Reactor>,
     /// Watches the session's next deadline in the poll (made when first needed).
     deadline: Option<DeadlineTimer>,
-    /// The reactor's epoch when this shell last took its sockets' readiness.
-    seen_epoch: u64,
+    /// A peer's TCP connect may be in progress (cleared by the pass that finds none).
+    any_connecting: bool,
     listeners: Listeners,
     peers: Vec<Option<PeerIo>>,
     request_buf: [u8; 256],
@@ -177,7 +159,7 @@ impl Shell {
         Shell {
             reactor: None,
             deadline: None,
-            seen_epoch: 0,
+            any_connecting: false,
             listeners: Listeners::None,
             peers: Vec::new(),
             request_buf: [0; 256],
@@ -207,7 +189,7 @@ impl Shell {
         Ok(Shell {
             reactor: Some(reactor.clone()),
             deadline: None,
-            seen_epoch: 0,
+            any_connecting: false,
             listeners: Listeners::Server {
                 tcp,
                 udp,
@@ -250,7 +232,7 @@ impl Shell {
         let shell = Shell {
             reactor: Some(reactor.clone()),
             deadline: None,
-            seen_epoch: 0,
+            any_connecting: false,
             listeners: Listeners::Client {
                 listener,
                 request: None,
@@ -269,6 +251,7 @@ impl Shell {
     /// Whether the session's next deadline (`Session::poll_timeout`) has passed. With a
     /// reactor a timer in the poll answers, so a pass reads the clock only when the deadline
     /// changes or passes; without one the clock is compared.
+    #[inline]
     pub(crate) fn deadline_passed(
         &mut self,
         deadline: Option<std::time::Instant>,
@@ -310,16 +293,38 @@ impl Shell {
 
     // ------------------------------------------------------------------ set-up
 
+    /// Whether a listener or a connecting socket may have something for [`service`]
+    /// (a few loads: most passes have nothing to set up).
+    #[inline]
+    fn setup_pending(&self) -> bool {
+        self.any_connecting
+            || match &self.listeners {
+                Listeners::Server { tcp, udp, .. } => tcp.ready.readable() || udp.ready.readable(),
+                Listeners::Client { listener, request } => {
+                    listener.as_ref().is_some_and(|l| l.ready.readable())
+                        || request.as_ref().is_some_and(|r| r.ready.readable())
+                }
+                Listeners::None => false,
+            }
+    }
+
     /// Takes what the listeners and connecting sockets are ready for to the session, then
     /// carries out what the session asks.
+    #[inline]
     pub(crate) fn service(&mut self, clock: &dyn TimeSource, session: &mut Session) {
+        if self.setup_pending() {
+            self.service_setup(clock, session);
+        }
+        if session.has_io() {
+            self.carry_out(clock, session);
+        }
+    }
+
+    #[inline(never)]
+    fn service_setup(&mut self, clock: &dyn TimeSource, session: &mut Session) {
         let Some(reactor) = self.reactor.clone() else {
             return;
         };
-        // Nothing new since the last look (no poll brought events): the sticky flags hold.
-        let epoch = reactor.epoch();
-        let fresh = epoch != self.seen_epoch;
-        self.seen_epoch = epoch;
         let Shell {
             listeners,
             peers,
@@ -328,25 +333,21 @@ impl Shell {
         } = self;
         match listeners {
             Listeners::Server { tcp, udp, .. } => {
-                if fresh {
-                    tcp.refresh(&reactor);
-                    udp.refresh(&reactor);
-                }
                 for _ in 0..REQUESTS_PER_PASS {
-                    if !udp.ready.readable {
+                    if !udp.ready.readable() {
                         break;
                     }
                     match udp.sock.recv_from(request_buf) {
                         Ok((n, from)) => {
                             session.handle_request(clock.now(), v4(from), &request_buf[..n]);
                         }
-                        Err(e) if would_block(&e) => udp.ready.readable = false,
+                        Err(e) if would_block(&e) => udp.ready.clear(ReadyBits::READABLE),
                         Err(e) if interrupted(&e) => {}
                         Err(_) => {}
                     }
                 }
                 for _ in 0..ACCEPTS_PER_PASS {
-                    if !tcp.ready.readable {
+                    if !tcp.ready.readable() {
                         break;
                     }
                     match tcp.sock.accept() {
@@ -364,18 +365,15 @@ impl Shell {
                                 }
                             }
                         }
-                        Err(e) if would_block(&e) => tcp.ready.readable = false,
+                        Err(e) if would_block(&e) => tcp.ready.clear(ReadyBits::READABLE),
                         Err(e) if interrupted(&e) => {}
-                        Err(_) => tcp.ready.readable = false,
+                        Err(_) => tcp.ready.clear(ReadyBits::READABLE),
                     }
                 }
             }
             Listeners::Client { listener, request } => {
                 if let Some(l) = listener.as_mut() {
-                    if fresh {
-                        l.refresh(&reactor);
-                    }
-                    while l.ready.readable {
+                    while l.ready.readable() {
                         match l.sock.accept() {
                             Ok((stream, from)) => {
                                 let local = stream.local_addr().map(v4).unwrap_or(v4(from));
@@ -400,17 +398,15 @@ impl Shell {
                                 }
                                 // Further call-backs while one is live are closed on drop.
                             }
-                            Err(e) if would_block(&e) => l.ready.readable = false,
+                            Err(e) if would_block(&e) => l.ready.clear(ReadyBits::READABLE),
                             Err(e) if interrupted(&e) => {}
-                            Err(_) => l.ready.readable = false,
+                            Err(_) => l.ready.clear(ReadyBits::READABLE),
                         }
                     }
                 }
                 if let Some(r) = request.as_mut() {
-                    if fresh {
-                        r.refresh(&reactor);
-                    }
-                    if std::mem::take(&mut r.ready.readable) {
+                    if r.ready.readable() {
+                        r.ready.clear(ReadyBits::READABLE);
                         let mut b = [0u8; 16];
                         if let Err(e) = r.sock.recv(&mut b) {
                             if e.kind() == io::ErrorKind::ConnectionRefused {
@@ -422,22 +418,20 @@ impl Shell {
             }
             Listeners::None => {}
         }
-        // What the poll saw for each peer's sockets (read and flush rely on it for the rest
-        // of the pass: only a poll changes it), and connects in progress.
+        // Connects in progress.
+        if !self.any_connecting {
+            return;
+        }
+        self.any_connecting = false;
         for slot in 0..self.peers.len() {
             let Some(p) = self.peers[slot].as_mut() else {
                 continue;
             };
-            if fresh {
-                p.tcp.refresh(&reactor);
-                if let Some(u) = p.udp_in.as_mut() {
-                    u.refresh(&reactor);
-                }
-            }
             if !p.connecting {
                 continue;
             }
-            if !p.tcp.ready.writable {
+            self.any_connecting = true;
+            if !p.tcp.ready.writable() {
                 continue;
             }
             let id = p.id;
@@ -460,17 +454,15 @@ impl Shell {
                     session.handle_connected(clock.now(), id, local);
                 }
                 Err(e) if e.kind() == io::ErrorKind::NotConnected => {
-                    p.tcp.ready.writable = false;
+                    p.tcp.ready.clear(ReadyBits::WRITABLE);
                 }
                 Err(e) => session.handle_connect_failed(clock.now(), id, &e),
             }
         }
-        if session.has_io() {
-            self.carry_out(clock, session);
-        }
     }
 
     /// Carries out every request the session has queued, reporting each outcome.
+    #[inline(never)]
     pub(crate) fn carry_out(&mut self, clock: &dyn TimeSource, session: &mut Session) {
         while let Some(req) = session.poll_io() {
             let Some(reactor) = self.reactor.clone() else {
@@ -484,9 +476,10 @@ impl Shell {
                         Sock::register(&reactor, s, Interest::READABLE | Interest::WRITABLE)
                     });
                     match started {
-                        Ok(mut tcp) => {
-                            tcp.ready.writable = false;
+                        Ok(tcp) => {
+                            tcp.ready.clear(ReadyBits::WRITABLE);
                             put_peer(&mut self.peers, &reactor, peer, tcp, true);
+                            self.any_connecting = true;
                         }
                         Err(e) => session.handle_connect_failed(clock.now(), peer, &e),
                     }
@@ -552,8 +545,8 @@ impl Shell {
                         Sock::register(&reactor, s, Interest::READABLE)
                     });
                     match sent {
-                        Ok(mut s) => {
-                            s.ready.readable = false;
+                        Ok(s) => {
+                            s.ready.clear(ReadyBits::READABLE);
                             *request = Some(s);
                         }
                         Err(e) => session.report_request_error(clock.now(), to, &e),
@@ -566,62 +559,26 @@ impl Shell {
     // ------------------------------------------------------------------ bytes
 
     /// Reads once from every socket whose peer wants input. Returns whether bytes came.
+    ///
+    /// The loop only looks at readiness bits; the reads themselves are in functions of their
+    /// own, so the many passes that find nothing to read stay cheap.
     pub(crate) fn read(&mut self, clock: &dyn TimeSource, session: &mut Session) -> bool {
         let mut got = false;
-        for slot in 0..self.peers.len() {
-            let Some(p) = self.peers[slot].as_mut() else {
-                continue;
-            };
+        for p in self.peers.iter_mut().flatten() {
             if p.connecting {
                 continue;
             }
-            let id = p.id;
-            if p.tcp.ready.readable {
-                let spare = session.rx_spare(id);
-                let spare_len = spare.len();
-                if spare_len > 0 {
-                    match p.tcp.sock.read(spare) {
-                        Ok(0) => {
-                            session.handle_closed(clock.now(), id, None);
-                            continue;
-                        }
-                        Ok(n) => {
-                            session.handle_tcp_data(id, n);
-                            got = true;
-                            if SHORT_READ_DRAINS && n < spare_len && !p.tcp.ready.read_closed {
-                                p.tcp.ready.readable = false;
-                            }
-                        }
-                        Err(e) if would_block(&e) => p.tcp.ready.readable = false,
-                        Err(e) if interrupted(&e) => {}
-                        Err(e) => {
-                            session.handle_closed(clock.now(), id, Some(&e));
-                            continue;
-                        }
-                    }
+            if p.tcp.ready.readable() {
+                match read_tcp(&mut p.tcp, p.id, clock, session) {
+                    Some(bytes) => got |= bytes,
+                    // Closed: its UDP channel went with it.
+                    None => continue,
                 }
             }
-            let Some(u) = p.udp_in.as_mut() else {
-                continue;
-            };
-            if !u.ready.readable {
-                continue;
-            }
-            let Some(inbox) = session.udp_inbox(id) else {
-                continue;
-            };
-            match recv_datagrams(&u.sock, inbox) {
-                Ok(n) => {
-                    session.handle_datagrams(id, n);
-                    got = true;
-                    // A short batch proves the queue empty (edge-triggered epoll raises a new
-                    // event for the next arrival): no WouldBlock call needed.
-                    if n < INBOX_SLOTS && SHORT_READ_DRAINS {
-                        u.ready.readable = false;
-                    }
+            if let Some(u) = &p.udp_in {
+                if u.ready.readable() {
+                    got |= read_udp(u, p.id, session);
                 }
-                Err(e) if would_block(&e) => u.ready.readable = false,
-                Err(_) => u.ready.readable = false,
             }
         }
         if got {
@@ -634,57 +591,132 @@ impl Shell {
 
     /// Writes what the session queued, as far as the sockets take it.
     pub(crate) fn flush(&mut self, clock: &dyn TimeSource, session: &mut Session) {
-        for slot in 0..self.peers.len() {
-            let Some(p) = self.peers[slot].as_mut() else {
-                continue;
-            };
+        for p in self.peers.iter_mut().flatten() {
             if p.connecting {
                 continue;
             }
             let id = p.id;
-            // After a WouldBlock, wait for the writable event (taken from the poll at the start
-            // of the pass) instead of retrying every pass: a stalled peer would otherwise cost
-            // a failing write per pass.
-            let mut failed = None;
-            while p.tcp.ready.writable {
-                let pending = session.tcp_pending(id);
-                if pending.is_empty() {
-                    break;
-                }
-                match p.tcp.sock.write(pending) {
-                    Ok(0) => break,
-                    Ok(n) => session.tcp_sent(id, n),
-                    Err(e) if would_block(&e) => p.tcp.ready.writable = false,
-                    Err(e) if interrupted(&e) => {}
-                    Err(e) => {
-                        failed = Some(e);
-                        break;
-                    }
-                }
-            }
-            if let Some(e) = failed {
-                session.handle_send_failed(clock.now(), id, &e);
+            // After a WouldBlock, wait for the writable event instead of retrying every pass:
+            // a stalled peer would otherwise cost a failing write per pass.
+            if p.tcp.ready.writable()
+                && !session.tcp_pending(id).is_empty()
+                && !write_tcp(&mut p.tcp, id, clock, session)
+            {
                 continue;
             }
-            match &p.udp_out {
-                Some(sock) => {
-                    while let Some(dg) = session.udp_front(id) {
-                        match sock.send(dg) {
-                            Err(e) if would_block(&e) => break,
-                            // Unreliable: a refused or failed datagram is simply lost.
-                            _ => session.udp_sent(id),
-                        }
-                    }
-                }
-                None => {
-                    while session.udp_front(id).is_some() {
-                        session.udp_sent(id);
-                    }
-                }
+            if let Some(queue) = session.udp_outbox(id) {
+                send_udp(p.udp_out.as_ref(), queue);
             }
         }
         if session.has_io() {
             self.carry_out(clock, session);
+        }
+    }
+}
+
+/// One read from a peer's TCP socket into the session. `Some(true)` when bytes came, `None`
+/// when the peer closed (or the socket failed).
+#[inline(never)]
+fn read_tcp(
+    tcp: &mut Sock<TcpStream>,
+    id: PeerId,
+    clock: &dyn TimeSource,
+    session: &mut Session,
+) -> Option<bool> {
+    let spare = session.rx_spare(id);
+    let spare_len = spare.len();
+    if spare_len == 0 {
+        return Some(false);
+    }
+    match tcp.sock.read(spare) {
+        Ok(0) => {
+            session.handle_closed(clock.now(), id, None);
+            None
+        }
+        Ok(n) => {
+            session.handle_tcp_data(id, n);
+            if SHORT_READ_DRAINS && n < spare_len && !tcp.ready.read_closed() {
+                tcp.ready.clear(ReadyBits::READABLE);
+            }
+            Some(true)
+        }
+        Err(e) if would_block(&e) => {
+            tcp.ready.clear(ReadyBits::READABLE);
+            Some(false)
+        }
+        Err(e) if interrupted(&e) => Some(false),
+        Err(e) => {
+            session.handle_closed(clock.now(), id, Some(&e));
+            None
+        }
+    }
+}
+
+/// One batch of datagrams from a peer's UDP socket into the session; true when any came.
+#[inline(never)]
+fn read_udp(u: &Sock<UdpSocket>, id: PeerId, session: &mut Session) -> bool {
+    let Some(inbox) = session.udp_inbox(id) else {
+        return false;
+    };
+    match recv_datagrams(&u.sock, inbox) {
+        Ok(n) => {
+            // As `handle_datagrams`, without looking the peer up again.
+            inbox.filled(n);
+            session.note_input();
+            // A short batch proves the queue empty (edge-triggered epoll raises a new event
+            // for the next arrival): no WouldBlock call needed.
+            if n < INBOX_SLOTS && SHORT_READ_DRAINS {
+                u.ready.clear(ReadyBits::READABLE);
+            }
+            true
+        }
+        Err(_) => {
+            u.ready.clear(ReadyBits::READABLE);
+            false
+        }
+    }
+}
+
+/// Writes a peer's queued stream bytes until done or the socket is full. False when the
+/// write failed (the session was told and drops the peer).
+#[inline(never)]
+fn write_tcp(
+    tcp: &mut Sock<TcpStream>,
+    id: PeerId,
+    clock: &dyn TimeSource,
+    session: &mut Session,
+) -> bool {
+    while tcp.ready.writable() {
+        let pending = session.tcp_pending(id);
+        if pending.is_empty() {
+            break;
+        }
+        match tcp.sock.write(pending) {
+            Ok(0) => break,
+            Ok(n) => session.tcp_sent(id, n),
+            Err(e) if would_block(&e) => tcp.ready.clear(ReadyBits::WRITABLE),
+            Err(e) if interrupted(&e) => {}
+            Err(e) => {
+                session.handle_send_failed(clock.now(), id, &e);
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Sends a peer's queued datagrams; without an outbound socket they are discarded
+/// (unreliable, as a refused or failed datagram is).
+#[inline(never)]
+fn send_udp(out: Option<&UdpSocket>, queue: &mut DatagramQueue) {
+    let Some(sock) = out else {
+        queue.clear();
+        return;
+    };
+    while let Some(dg) = queue.front() {
+        match sock.send(dg) {
+            Err(e) if would_block(&e) => break,
+            _ => queue.pop_front(),
         }
     }
 }

@@ -131,6 +131,12 @@ impl DatagramQueue {
         true
     }
 
+    /// No datagram waits.
+    #[inline]
+    pub(crate) fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
     /// The oldest datagram waiting, if any.
     pub(crate) fn front(&self) -> Option<&[u8]> {
         (self.count > 0).then(|| {

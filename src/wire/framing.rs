@@ -85,6 +85,7 @@ impl StreamDecoder {
     ///
     /// `None` means more bytes are needed. An error means the stream cannot be framed any more
     /// (bad length field) and the connection must be dropped.
+    #[inline]
     pub fn next_message(&mut self) -> Option<Result<(Header, &[u8])>> {
         let avail = &self.buf[self.start..self.end];
         if avail.len() < HEADER_LEN {

@@ -347,6 +347,13 @@ impl Session {
         })
     }
 
+    /// Bytes or datagrams were put into a peer's buffers directly (the shell's
+    /// [`udp_inbox`](Self::udp_inbox) fast path): walk them.
+    #[inline]
+    pub(crate) fn note_input(&mut self) {
+        self.input_pending = true;
+    }
+
     /// `count` datagrams were received into [`udp_inbox`](Self::udp_inbox).
     pub fn handle_datagrams(&mut self, peer: PeerId, count: usize) {
         if let Some(inbox) = self.peer_mut(peer).and_then(|p| p.udp_rx.as_mut()) {

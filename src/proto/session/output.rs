@@ -5,6 +5,7 @@ use std::net::SocketAddrV4;
 use std::time::Instant;
 
 use super::{Kind, Session};
+use crate::proto::buffers::DatagramQueue;
 use crate::proto::client::Failure;
 use crate::proto::endpoint::Phase;
 use crate::proto::{IoRequest, PeerId, Severity};
@@ -47,6 +48,22 @@ impl Session {
             return None;
         }
         p.udp_tx.front()
+    }
+
+    /// The datagrams waiting for `peer`, to send oldest first (`front`, then `pop_front`
+    /// once sent or lost); `None` when none wait. Without an open channel they are discarded
+    /// here (unreliable). One lookup for the whole queue, for the shell's flush.
+    #[inline]
+    pub(crate) fn udp_outbox(&mut self, peer: PeerId) -> Option<&mut DatagramQueue> {
+        let p = self.peer_mut(peer)?;
+        if p.udp_tx.is_empty() {
+            return None;
+        }
+        if !p.udp_ready {
+            p.udp_tx.clear();
+            return None;
+        }
+        Some(&mut p.udp_tx)
     }
 
     /// The datagram from [`udp_front`](Self::udp_front) went out (or was lost).

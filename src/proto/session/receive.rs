@@ -92,20 +92,18 @@ impl Session {
     }
 
     /// The next delivery from the bytes buffered for the peer in `slot`.
+    ///
+    /// The steady-state path (a described message on the stream or in a datagram) stays in
+    /// this function; set-up and every kind of bad input are handled out of line.
     fn next_from_peer(&mut self, now: &dyn TimeSource, slot: usize) -> Option<Delivery> {
         loop {
             let p = self.peers[slot].as_mut()?;
-            let id = p.id;
             match p.phase {
                 Phase::Connecting => return None,
-                Phase::AwaitingCookie => {
-                    p.cookie()?;
-                    self.handle_cookie(now.now(), id);
-                    if !self.queue.is_empty() {
-                        return self.queue.pop_front();
-                    }
-                    continue;
-                }
+                Phase::AwaitingCookie => match self.cookie_step(now, slot) {
+                    Some(d) => return d,
+                    None => continue,
+                },
                 Phase::Describing | Phase::Connected => {}
             }
             let rx = p.rx.as_mut()?;
@@ -115,10 +113,7 @@ impl Session {
                     self.scratch[..len].copy_from_slice(payload);
                     match self.handle_message(slot, h, len, Via::Tcp, now) {
                         Outcome::Deliver(d) => return Some(d),
-                        Outcome::Drop(reason) => {
-                            self.drop_peer(now.now(), id, reason, None);
-                            return self.queue.pop_front();
-                        }
+                        Outcome::Drop(reason) => return self.drop_for(now, slot, reason),
                         Outcome::Continue => {
                             if self.clock_names_seen && self.clock_ids.is_none() {
                                 self.ensure_clock_ids(now.now());
@@ -130,11 +125,7 @@ impl Session {
                         }
                     }
                 }
-                Some(Err(e)) => {
-                    let reason = format!("malformed message from {}: {e}", p.label);
-                    self.drop_peer(now.now(), id, reason, Some(Failure::Other(e.to_string())));
-                    return self.queue.pop_front();
-                }
+                Some(Err(e)) => return self.malformed_stream(now, slot, e),
                 None => {}
             }
             // Then the datagrams received for this peer.
@@ -148,22 +139,11 @@ impl Session {
             if inbox.is_drained() {
                 return None;
             }
-            let source = inbox.current_source();
-            if !named && *source.ip() != peer_ip {
-                // Only the peer may speak on its UDP channel: a datagram from anyone else is
-                // dropped unread (it could otherwise inject messages into the session).
-                inbox.skip_datagram();
-                p.foreign_datagrams += 1;
-                if p.foreign_datagrams == 1 {
-                    let text = format!(
-                        "ignoring UDP datagrams sent to {}'s channel from another address \
-                         ({source})",
-                        p.label
-                    );
-                    self.notice(Severity::Warning, text);
-                    return self.queue.pop_front();
+            if !named && *inbox.current_source().ip() != peer_ip {
+                match self.foreign_datagram(slot) {
+                    Some(d) => return d,
+                    None => continue,
                 }
-                continue;
             }
             let dg = inbox.current();
             let mut it = wire::DatagramMessages::new(dg);
@@ -175,10 +155,7 @@ impl Session {
                     inbox.advance(advance);
                     match self.handle_message(slot, h, len, Via::Udp, now) {
                         Outcome::Deliver(d) => return Some(d),
-                        Outcome::Drop(reason) => {
-                            self.drop_peer(now.now(), id, reason, None);
-                            return self.queue.pop_front();
-                        }
+                        Outcome::Drop(reason) => return self.drop_for(now, slot, reason),
                         Outcome::Continue => {
                             if !self.queue.is_empty() || !self.to_describe.is_empty() {
                                 return None;
@@ -186,16 +163,84 @@ impl Session {
                         }
                     }
                 }
-                Some(Err(e)) => {
-                    // C++ drops the whole connection on a bad datagram; we drop the datagram.
-                    inbox.skip_datagram();
-                    let t = format!("discarded a malformed UDP datagram from {}: {e}", p.label);
-                    self.notice(Severity::Warning, t);
-                    return self.queue.pop_front();
-                }
+                Some(Err(e)) => return self.malformed_datagram(slot, e),
                 None => inbox.skip_datagram(),
             }
         }
+    }
+
+    /// A peer that has not sent its cookie yet: check it once it is all here. `None` to go
+    /// on walking the peer's bytes, `Some(d)` to return `d`.
+    #[inline(never)]
+    fn cookie_step(&mut self, now: &dyn TimeSource, slot: usize) -> Option<Option<Delivery>> {
+        let p = self.peers[slot].as_mut()?;
+        let id = p.id;
+        if p.cookie().is_none() {
+            return Some(None);
+        }
+        self.handle_cookie(now.now(), id);
+        if !self.queue.is_empty() {
+            return Some(self.queue.pop_front());
+        }
+        None
+    }
+
+    /// Drops the peer in `slot` for breaking the protocol.
+    #[cold]
+    #[inline(never)]
+    fn drop_for(&mut self, now: &dyn TimeSource, slot: usize, reason: String) -> Option<Delivery> {
+        let id = self.peers[slot].as_ref()?.id;
+        self.drop_peer(now.now(), id, reason, None);
+        self.queue.pop_front()
+    }
+
+    /// The peer's stream cannot be framed any more: drop it.
+    #[cold]
+    #[inline(never)]
+    fn malformed_stream(
+        &mut self,
+        now: &dyn TimeSource,
+        slot: usize,
+        e: wire::WireError,
+    ) -> Option<Delivery> {
+        let p = self.peers[slot].as_ref()?;
+        let (id, reason) = (p.id, format!("malformed message from {}: {e}", p.label));
+        self.drop_peer(now.now(), id, reason, Some(Failure::Other(e.to_string())));
+        self.queue.pop_front()
+    }
+
+    /// Only the peer may speak on its UDP channel: a datagram from anyone else is dropped
+    /// unread (it could otherwise inject messages into the session). Returns as
+    /// [`cookie_step`](Self::cookie_step).
+    #[cold]
+    #[inline(never)]
+    fn foreign_datagram(&mut self, slot: usize) -> Option<Option<Delivery>> {
+        let p = self.peers[slot].as_mut()?;
+        let inbox = p.udp_rx.as_mut()?;
+        let source = inbox.current_source();
+        inbox.skip_datagram();
+        p.foreign_datagrams += 1;
+        if p.foreign_datagrams == 1 {
+            let text = format!(
+                "ignoring UDP datagrams sent to {}'s channel from another address ({source})",
+                p.label
+            );
+            self.notice(Severity::Warning, text);
+            return Some(self.queue.pop_front());
+        }
+        None
+    }
+
+    /// A datagram that does not frame: C++ drops the whole connection; we drop the datagram.
+    #[cold]
+    #[inline(never)]
+    fn malformed_datagram(&mut self, slot: usize, e: wire::WireError) -> Option<Delivery> {
+        let p = self.peers[slot].as_mut()?;
+        let inbox = p.udp_rx.as_mut()?;
+        inbox.skip_datagram();
+        let t = format!("discarded a malformed UDP datagram from {}: {e}", p.label);
+        self.notice(Severity::Warning, t);
+        self.queue.pop_front()
     }
 
     /// The next entry of a replayed log that is due, through the same handling as a live
@@ -260,6 +305,10 @@ impl Session {
 
     /// Interprets one message whose payload is in `scratch[..len]`: system messages update
     /// tables; user messages are translated and returned for delivery.
+    ///
+    /// Device reports take the short way (`handle_user_message`); system messages, which
+    /// come during set-up, have a function of their own.
+    #[inline(always)]
     fn handle_message(
         &mut self,
         slot: usize,
@@ -273,31 +322,50 @@ impl Session {
             logs,
             scratch,
             limits,
-            clock_ids,
             ..
         } = self;
         let Some(p) = peers[slot].as_mut() else {
             return Outcome::Continue;
         };
-        let payload = &scratch[..len];
         if via != Via::Log {
             if let Some(w) = p.log_in.as_mut().or(logs.incoming.as_mut()) {
-                let _ = w.log_message(h.type_id, h.sender, h.time, payload);
+                let _ = w.log_message(h.type_id, h.sender, h.time, &scratch[..len]);
             }
         }
         if len > limits.max_message_payload {
-            return Outcome::Drop(format!(
-                "{} sent a {len}-byte message; the limit is {} bytes \
-                 (Limits::max_message_payload)",
-                p.label, limits.max_message_payload
-            ));
+            return oversized(&p.label, len, limits.max_message_payload);
         }
+        if h.type_id < 0 {
+            return self.handle_system_message(slot, h, len, via);
+        }
+        self.handle_user_message(slot, h, len, via, now)
+    }
+
+    /// A message of the protocol itself (negative type id).
+    #[inline(never)]
+    fn handle_system_message(
+        &mut self,
+        slot: usize,
+        h: wire::Header,
+        len: usize,
+        via: Via,
+    ) -> Outcome {
         if matches!(
             h.type_id,
             system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION
         ) {
             return self.handle_description(slot, h, len);
         }
+        let Session {
+            peers,
+            scratch,
+            limits,
+            ..
+        } = self;
+        let Some(p) = peers[slot].as_mut() else {
+            return Outcome::Continue;
+        };
+        let payload = &scratch[..len];
         match h.type_id {
             system::UDP_DESCRIPTION => {
                 if via != Via::Tcp || p.tcp_only {
@@ -345,46 +413,63 @@ impl Session {
                 p.types.clear();
                 Outcome::Continue
             }
-            t if t < 0 => Outcome::Continue,
-            t => {
-                let local_type = p.types.lookup(t);
-                if local_type < 0 {
-                    return Outcome::Continue; // never described: ignored, as C++ does
-                }
-                if let Some(ids) = clock_ids.filter(|ids| ids.is_clock_type(local_type)) {
-                    if via != Via::Log {
-                        return self.handle_clock_message(slot, ids, local_type, len, now);
-                    }
-                    return Outcome::Continue;
-                }
-                let local_sender = p.senders.lookup(h.sender);
-                // In local time when the peer's clock is known (a cheap test first: a peer that
-                // never answered, a C++ one, costs nothing here).
-                let time = match p.clock.as_deref() {
-                    Some(c) if c.has_estimate() => {
-                        let translation = match p.clock_pass {
-                            Some((t, _)) => t,
-                            None => {
-                                let (t, until) = c.translation_until(now.now());
-                                p.clock_pass = Some((t, until));
-                                // Its limit is a deadline of the session.
-                                self.timeout_cache.set(None);
-                                t
-                            }
-                        };
-                        translation.map_or(h.time, |t| t.remote_to_local(h.time))
-                    }
-                    _ => h.time,
-                };
-                Outcome::Deliver(Delivery::Message {
-                    time,
-                    sender_time: h.time,
-                    sender: local_sender,
-                    type_id: local_type,
-                    len,
-                })
-            }
+            _ => Outcome::Continue,
         }
+    }
+
+    /// A message of a device or an application: translate its ids (and its time, when the
+    /// peer's clock is known) and deliver it.
+    #[inline(always)]
+    fn handle_user_message(
+        &mut self,
+        slot: usize,
+        h: wire::Header,
+        len: usize,
+        via: Via,
+        now: &dyn TimeSource,
+    ) -> Outcome {
+        let Session {
+            peers, clock_ids, ..
+        } = self;
+        let Some(p) = peers[slot].as_mut() else {
+            return Outcome::Continue;
+        };
+        let local_type = p.types.lookup(h.type_id);
+        if local_type < 0 {
+            return Outcome::Continue; // never described: ignored, as C++ does
+        }
+        if let Some(ids) = clock_ids.filter(|ids| ids.is_clock_type(local_type)) {
+            if via != Via::Log {
+                return self.handle_clock_message(slot, ids, local_type, len, now);
+            }
+            return Outcome::Continue;
+        }
+        let local_sender = p.senders.lookup(h.sender);
+        // In local time when the peer's clock is known (a cheap test first: a peer that
+        // never answered, a C++ one, costs nothing here).
+        let time = match p.clock.as_deref() {
+            Some(c) if c.has_estimate() => {
+                let translation = match p.clock_pass {
+                    Some((t, _)) => t,
+                    None => {
+                        let (t, until) = c.translation_until(now.now());
+                        p.clock_pass = Some((t, until));
+                        // Its limit is a deadline of the session.
+                        self.timeout_cache.set(None);
+                        t
+                    }
+                };
+                translation.map_or(h.time, |t| t.remote_to_local(h.time))
+            }
+            _ => h.time,
+        };
+        Outcome::Deliver(Delivery::Message {
+            time,
+            sender_time: h.time,
+            sender: local_sender,
+            type_id: local_type,
+            len,
+        })
     }
 
     /// A sender or type description: learn the name, map the peer's id to ours.
@@ -540,4 +625,14 @@ impl Session {
         }
         Outcome::Continue
     }
+}
+
+/// The outcome for a message over [`Limits::max_message_payload`](crate::Limits).
+#[cold]
+#[inline(never)]
+fn oversized(label: &str, len: usize, limit: usize) -> Outcome {
+    Outcome::Drop(format!(
+        "{label} sent a {len}-byte message; the limit is {limit} bytes \
+         (Limits::max_message_payload)"
+    ))
 }

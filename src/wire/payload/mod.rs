@@ -130,6 +130,9 @@ macro_rules! fixed_payload {
                     Self::LEN,
                     concat!(stringify!($name), " payload length"),
                 )?;
+                // One bounds check for the whole payload: the fields' offsets are constants.
+                #[allow(unused_variables)]
+                let buf = &buf[..Self::LEN];
                 #[allow(unused_mut, unused_variables)]
                 let mut off = 0usize;
                 $(
@@ -142,6 +145,8 @@ macro_rules! fixed_payload {
             /// Writes the payload at the start of `out` (at least `LEN` bytes); returns `LEN`.
             #[allow(unused_assignments)]
             pub fn encode(&self, out: &mut [u8]) -> usize {
+                #[allow(unused_variables)]
+                let out = &mut out[..Self::LEN];
                 #[allow(unused_mut, unused_variables)]
                 let mut off = 0usize;
                 $(
