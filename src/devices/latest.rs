@@ -53,21 +53,14 @@ impl<T: Copy> Latest<T> {
     /// Stores the value `make(seq)` builds for index `i`, where `seq` counts the values that
     /// arrived for `i` (1 for the first). Returns the value; an index at or beyond
     /// [`MAX_LATEST_INDEX`] is not stored and gets `seq` 0.
+    #[inline]
     pub(crate) fn store(&self, i: usize, make: impl FnOnce(u64) -> T) -> T {
         if i >= MAX_LATEST_INDEX {
             return make(0);
         }
         let mut s = self.slots.borrow_mut();
         if s.len() <= i {
-            // Grows once per new index, never per report.
-            s.resize(
-                i + 1,
-                Slot {
-                    value: None,
-                    seq: 0,
-                    taken: 0,
-                },
-            );
+            grow(&mut s, i + 1);
         }
         let slot = &mut s[i];
         slot.seq += 1;
@@ -113,6 +106,20 @@ impl<T: Copy> Latest<T> {
     pub(crate) fn len(&self) -> usize {
         self.slots.borrow().len()
     }
+}
+
+/// Grows a store to `len` indices: once per new index, never per report.
+#[cold]
+#[inline(never)]
+fn grow<T: Copy>(slots: &mut Vec<Slot<T>>, len: usize) {
+    slots.resize(
+        len,
+        Slot {
+            value: None,
+            seq: 0,
+            taken: 0,
+        },
+    );
 }
 
 /// An index given by the caller: `usize`, or any other integer type (C++ ports pass `int`).

@@ -792,6 +792,7 @@ impl Translation {
     ///
     /// This runs for every message from a synchronised peer, so it avoids divisions and the
     /// library call behind `f64::round` (halves round away from zero, as `round` does).
+    #[inline]
     pub fn remote_to_local(&self, remote: TimeVal) -> TimeVal {
         let remote_us = remote
             .sec
