@@ -588,4 +588,42 @@ mod tests {
         assert!(r.take_activity());
         assert!(!r.timed_pending());
     }
+
+    /// A shared registration gets its readiness straight from the poll into its bits, which
+    /// stay as the owner left them until an event sets them again.
+    #[test]
+    fn shared_bits_are_set_by_the_poll_and_cleared_by_the_owner() {
+        let r = Reactor::new().unwrap();
+        let mut udp = mio::net::UdpSocket::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let to = udp.local_addr().unwrap();
+        let bits = ReadyBits::new(0);
+        r.register_shared(&mut udp, Interest::READABLE, false, &bits)
+            .unwrap();
+        r.poll_now().unwrap();
+        assert!(!bits.readable(), "readable before anything was sent");
+
+        let sender = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        sender.send_to(b"y", to).unwrap();
+        let start = Instant::now();
+        while !bits.readable() {
+            assert!(start.elapsed() < Duration::from_secs(5), "never readable");
+            r.wait(None, Duration::from_millis(50)).unwrap();
+        }
+        assert!(r.take_activity(), "socket data is activity");
+        let mut buf = [0u8; 8];
+        assert_eq!(udp.recv(&mut buf).unwrap(), 1);
+        bits.clear(ReadyBits::READABLE);
+        r.poll_now().unwrap();
+        assert!(!bits.readable(), "a poll without events set the bit again");
+
+        sender.send_to(b"z", to).unwrap();
+        let start = Instant::now();
+        while !bits.readable() {
+            assert!(
+                start.elapsed() < Duration::from_secs(5),
+                "second datagram unseen"
+            );
+            r.wait(None, Duration::from_millis(50)).unwrap();
+        }
+    }
 }
