@@ -545,6 +545,15 @@ mod tests {
     use super::*;
     use std::os::fd::AsRawFd;
 
+    /// Polls `r` until `done` holds, failing with `what` after 5 s.
+    fn poll_until(r: &Reactor, what: &str, mut done: impl FnMut() -> bool) {
+        let start = Instant::now();
+        while !done() {
+            assert!(start.elapsed() < Duration::from_secs(5), "{what}");
+            r.wait(None, Duration::from_millis(50)).unwrap();
+        }
+    }
+
     /// Serial bytes are stamped with the wake time and leave the server loop's busy-poll
     /// window alone; until the port's owner takes them they are pending, so the loop does
     /// not block over them. Socket data is activity.
@@ -560,14 +569,7 @@ mod tests {
         let sock = r.register(&mut udp, Interest::READABLE).unwrap();
 
         nix::unistd::write(master.as_raw_fd(), b"x").unwrap();
-        let start = Instant::now();
-        while !r.timed_pending() {
-            assert!(
-                start.elapsed() < Duration::from_secs(5),
-                "pty never readable"
-            );
-            r.wait(None, Duration::from_millis(50)).unwrap();
-        }
+        poll_until(&r, "pty never readable", || r.timed_pending());
         assert!(!r.take_activity(), "serial bytes counted as activity");
         let ready = r.take(port);
         assert!(ready.readable && ready.woke.is_some());
@@ -577,14 +579,7 @@ mod tests {
             .unwrap()
             .send_to(b"y", to)
             .unwrap();
-        let start = Instant::now();
-        while !r.take(sock).readable {
-            assert!(
-                start.elapsed() < Duration::from_secs(5),
-                "socket never readable"
-            );
-            r.wait(None, Duration::from_millis(50)).unwrap();
-        }
+        poll_until(&r, "socket never readable", || r.take(sock).readable);
         assert!(r.take_activity());
         assert!(!r.timed_pending());
     }
@@ -604,11 +599,7 @@ mod tests {
 
         let sender = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
         sender.send_to(b"y", to).unwrap();
-        let start = Instant::now();
-        while !bits.readable() {
-            assert!(start.elapsed() < Duration::from_secs(5), "never readable");
-            r.wait(None, Duration::from_millis(50)).unwrap();
-        }
+        poll_until(&r, "never readable", || bits.readable());
         assert!(r.take_activity(), "socket data is activity");
         let mut buf = [0u8; 8];
         assert_eq!(udp.recv(&mut buf).unwrap(), 1);
@@ -617,13 +608,6 @@ mod tests {
         assert!(!bits.readable(), "a poll without events set the bit again");
 
         sender.send_to(b"z", to).unwrap();
-        let start = Instant::now();
-        while !bits.readable() {
-            assert!(
-                start.elapsed() < Duration::from_secs(5),
-                "second datagram unseen"
-            );
-            r.wait(None, Duration::from_millis(50)).unwrap();
-        }
+        poll_until(&r, "second datagram unseen", || bits.readable());
     }
 }
