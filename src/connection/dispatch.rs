@@ -55,6 +55,7 @@ impl<'a> Message<'a> {
     /// When the message arrived here, on the local clock: the time of the `mainloop()` pass
     /// that read it. A message delivered in-process outside a pass (an in-process server
     /// reporting to an in-process remote) arrives when it is sent: its own time.
+    #[inline]
     pub fn arrived(&self) -> TimeVal {
         self.conn.pass_time().unwrap_or(self.time)
     }
@@ -146,6 +147,17 @@ pub enum SenderFilter {
     Only(SenderId),
 }
 
+impl SenderFilter {
+    /// Whether a message from `sender` passes this filter.
+    #[inline]
+    pub fn accepts(self, sender: SenderId) -> bool {
+        match self {
+            SenderFilter::Any => true,
+            SenderFilter::Only(s) => s == sender,
+        }
+    }
+}
+
 type MessageHandler = Rc<RefCell<dyn FnMut(&Message<'_>)>>;
 
 struct HandlerEntry {
@@ -201,15 +213,17 @@ impl HandlerTable {
         found || any.len() != before
     }
 
-    /// True when some handler could want messages of this type (lets senders skip work).
+    /// True when some handler wants messages of this type from this sender (lets senders skip
+    /// building, queueing and dispatching a message nobody takes).
     #[inline]
-    pub(crate) fn has_handlers(&self, type_id: TypeId) -> bool {
-        !self.any_type.borrow().is_empty()
+    pub(crate) fn wants_any(&self, type_id: TypeId, sender: SenderId) -> bool {
+        let wanted = |l: &Vec<HandlerEntry>| l.iter().any(|e| e.sender.accepts(sender));
+        wanted(&self.any_type.borrow())
             || self
                 .by_type
                 .borrow()
                 .get(type_id.0.max(0) as usize)
-                .is_some_and(|l| !l.is_empty())
+                .is_some_and(wanted)
     }
 
     /// Calls the handlers for `msg`: type-specific ones first, then any-type ones.
@@ -252,10 +266,7 @@ impl HandlerTable {
     }
 
     fn wants(e: &HandlerEntry, msg: &Message<'_>) -> bool {
-        match e.sender {
-            SenderFilter::Any => true,
-            SenderFilter::Only(s) => s == msg.sender,
-        }
+        e.sender.accepts(msg.sender)
     }
 }
 
@@ -309,5 +320,20 @@ mod tests {
         assert!(t.remove(any));
         t.dispatch(&msg(1));
         assert_eq!(hits.get(), 202);
+    }
+
+    #[test]
+    fn wants_any_answers_for_the_sender_not_just_the_type() {
+        let t = HandlerTable::default();
+        assert!(!t.wants_any(TypeId(3), SenderId(1)));
+        t.add(Some(TypeId(3)), SenderFilter::Only(SenderId(1)), |_| {});
+        assert!(t.wants_any(TypeId(3), SenderId(1)));
+        assert!(!t.wants_any(TypeId(3), SenderId(2)));
+        assert!(!t.wants_any(TypeId(4), SenderId(1)));
+        let any = t.add(None, SenderFilter::Only(SenderId(2)), |_| {});
+        assert!(t.wants_any(TypeId(4), SenderId(2)));
+        assert!(t.remove(any));
+        t.add(Some(TypeId(3)), SenderFilter::Any, |_| {});
+        assert!(t.wants_any(TypeId(3), SenderId(9)));
     }
 }

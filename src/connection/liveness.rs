@@ -119,10 +119,18 @@ impl Connection {
         }
     }
 
+    /// The earliest ping deadline of the started cycles, worked out again only after a change
+    /// (inline: every pass asks).
+    #[inline]
     pub(super) fn liveness_deadline(&self) -> Option<Instant> {
-        if let Some(known) = self.inner.liveness_next.get() {
-            return known;
+        match self.inner.liveness_next.get() {
+            Some(known) => known,
+            None => self.liveness_deadline_changed(),
         }
+    }
+
+    #[inline(never)]
+    fn liveness_deadline_changed(&self) -> Option<Instant> {
         let list = self.inner.liveness.borrow();
         let next = list
             .iter()

@@ -307,11 +307,10 @@ impl Connection {
 
     /// The time of the running `mainloop()` pass (read now if nothing in the pass read it
     /// yet), or `None` outside a pass.
+    #[inline]
     pub(crate) fn pass_time(&self) -> Option<TimeVal> {
-        self.inner
-            .clock
-            .in_pass()
-            .then(|| self.inner.clock.now().wall)
+        let clock = &self.inner.clock;
+        clock.in_pass().then(|| clock.wall())
     }
 
     /// The clock-synchronisation estimate of the peer (a client's server; a server's first
@@ -451,6 +450,7 @@ impl Connection {
     /// sends nothing, not even to local handlers. Send requests again once
     /// [`on_state_change`](Self::on_state_change) reports `Connected`. A server with no
     /// client is not an error: its reports go to whoever is connected, which may be nobody.
+    #[inline]
     pub fn pack_message(
         &self,
         time: TimeVal,
@@ -478,7 +478,7 @@ impl Connection {
                 core.session.drop_backlogged(self.inner.clock.now());
             }
         }
-        if self.inner.handlers.has_handlers(type_id) {
+        if self.inner.handlers.wants_any(type_id, sender) {
             let msg = Message {
                 time,
                 sender_time: time,

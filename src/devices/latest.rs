@@ -22,6 +22,7 @@ pub(crate) struct Stamp {
 }
 
 impl Stamp {
+    #[inline]
     pub(crate) fn of(m: &crate::dispatch::Message<'_>) -> Stamp {
         Stamp {
             sender_time: m.sender_time,
@@ -53,8 +54,13 @@ impl<T: Copy> Latest<T> {
     /// Stores the value `make(seq)` builds for index `i`, where `seq` counts the values that
     /// arrived for `i` (1 for the first). Returns the value; an index at or beyond
     /// [`MAX_LATEST_INDEX`] is not stored and gets `seq` 0.
+    ///
+    /// `make` runs twice, once into the slot and once for the returned copy: copying a report
+    /// that was just written field by field reads it back in wider loads the CPU cannot
+    /// forward from its store buffer, and that stall cost more than the whole store (about
+    /// 3 ns of a 26 ns in-process report; see docs/PERFORMANCE.md).
     #[inline]
-    pub(crate) fn store(&self, i: usize, make: impl FnOnce(u64) -> T) -> T {
+    pub(crate) fn store(&self, i: usize, make: impl Fn(u64) -> T) -> T {
         if i >= MAX_LATEST_INDEX {
             return make(0);
         }
@@ -64,9 +70,9 @@ impl<T: Copy> Latest<T> {
         }
         let slot = &mut s[i];
         slot.seq += 1;
-        let v = make(slot.seq);
-        slot.value = Some(v);
-        v
+        let seq = slot.seq;
+        slot.value = Some(make(seq));
+        make(seq)
     }
 
     /// The newest value of `i`, if any arrived.

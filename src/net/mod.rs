@@ -16,20 +16,31 @@ pub use reactor::{Reactor, Ready};
 
 use std::cell::Cell;
 
-use crate::time::{Now, TimeSource};
+use crate::time::{Now, TimeSource, TimeVal};
 
-/// Reads both clocks: the only clock reading in the library (the programs read their own).
+/// Reads both clocks: with [`wall_clock`], the only clock reading in the library (the programs
+/// read their own).
 #[inline]
 pub(crate) fn clock() -> Now {
     Now::read()
 }
 
+/// Reads the wall clock alone (half the cost of [`clock`]: what a pass needs when only message
+/// arrival times want the time).
+#[inline]
+pub(crate) fn wall_clock() -> TimeVal {
+    TimeVal::now()
+}
+
 /// The clock of one loop pass: read the first time something in the pass needs the time, then
-/// the same reading until the pass ends. A pass that only moves messages reads no clock.
+/// the same reading until the pass ends. A pass that only moves messages reads no clock; one
+/// that only stamps arrivals reads the wall clock alone.
 #[derive(Debug, Default)]
 pub(crate) struct PassClock {
     in_pass: Cell<bool>,
     now: Cell<Option<Now>>,
+    /// The wall clock read by [`wall`](Self::wall) before anything needed both clocks.
+    wall: Cell<Option<TimeVal>>,
 }
 
 impl PassClock {
@@ -39,11 +50,12 @@ impl PassClock {
         if self.in_pass.replace(true) {
             return false;
         }
-        self.now.set(None);
+        self.forget();
         true
     }
 
     /// True inside a pass.
+    #[inline]
     pub(crate) fn in_pass(&self) -> bool {
         self.in_pass.get()
     }
@@ -51,7 +63,34 @@ impl PassClock {
     /// Ends the pass begun by the matching [`begin`](Self::begin) that returned true.
     pub(crate) fn end(&self) {
         self.in_pass.set(false);
+        self.forget();
+    }
+
+    fn forget(&self) {
         self.now.set(None);
+        self.wall.set(None);
+    }
+
+    /// The pass's wall-clock time (the clock outside a pass), the same reading as
+    /// [`now`](TimeSource::now)'s `wall` within one pass, whichever was asked first.
+    #[inline]
+    pub(crate) fn wall(&self) -> TimeVal {
+        if let Some(n) = self.now.get() {
+            return n.wall;
+        }
+        match self.wall.get() {
+            Some(w) if self.in_pass.get() => w,
+            _ => self.read_wall(),
+        }
+    }
+
+    #[inline(never)]
+    fn read_wall(&self) -> TimeVal {
+        let w = wall_clock();
+        if self.in_pass.get() {
+            self.wall.set(Some(w));
+        }
+        w
     }
 }
 
@@ -63,7 +102,11 @@ impl TimeSource for PassClock {
         match self.now.get() {
             Some(n) => n,
             None => {
-                let n = clock();
+                let mut n = clock();
+                // A pass that already stamped arrivals keeps that wall-clock reading.
+                if let Some(w) = self.wall.get() {
+                    n.wall = w;
+                }
                 self.now.set(Some(n));
                 n
             }

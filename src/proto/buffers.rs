@@ -245,6 +245,67 @@ impl DatagramInbox {
     }
 }
 
+/// Alignment of [`PayloadBuf`]: a cache line.
+const PAYLOAD_ALIGN: usize = 64;
+
+/// The buffer a message's payload is copied into before handlers read it, starting on a
+/// cache-line boundary.
+///
+/// Where a plain `Vec` starts is up to the allocator. Measured: one that began 48 bytes before
+/// a page boundary made every 64-byte pose payload copy a store split across two pages, and
+/// those copies took longer than all the rest of a report's receive path (the UDP throughput
+/// figure fell by 5 %). Aligning it takes the luck out.
+pub struct PayloadBuf {
+    bytes: Vec<u8>,
+    start: usize,
+}
+
+impl PayloadBuf {
+    /// A zeroed buffer of `len` usable bytes.
+    pub fn new(len: usize) -> PayloadBuf {
+        let mut bytes = vec![0; len + PAYLOAD_ALIGN];
+        // `align_offset` may in principle decline (usize::MAX); the buffer then works unaligned.
+        let start = match bytes.as_ptr().align_offset(PAYLOAD_ALIGN) {
+            n if n < PAYLOAD_ALIGN => n,
+            _ => 0,
+        };
+        // Exactly `len` usable bytes (shortening a Vec keeps its allocation in place).
+        bytes.truncate(start + len);
+        PayloadBuf { bytes, start }
+    }
+}
+
+impl Default for PayloadBuf {
+    /// An empty buffer (what is left behind while the real one is lent out).
+    fn default() -> PayloadBuf {
+        PayloadBuf {
+            bytes: Vec::new(),
+            start: 0,
+        }
+    }
+}
+
+impl std::ops::Deref for PayloadBuf {
+    type Target = [u8];
+    #[inline]
+    fn deref(&self) -> &[u8] {
+        &self.bytes[self.start..]
+    }
+}
+
+impl std::ops::DerefMut for PayloadBuf {
+    #[inline]
+    fn deref_mut(&mut self) -> &mut [u8] {
+        &mut self.bytes[self.start..]
+    }
+}
+
+impl std::fmt::Debug for PayloadBuf {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "PayloadBuf({} bytes)", self.len())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -304,5 +365,18 @@ mod tests {
         assert_eq!(inbox.current(), b"de");
         inbox.advance(2);
         assert!(inbox.is_drained());
+    }
+
+    #[test]
+    fn payload_buffer_starts_on_a_cache_line_and_lends_its_whole_length() {
+        for len in [1, 88, 65_536] {
+            let mut b = PayloadBuf::new(len);
+            assert_eq!(b.len(), len);
+            assert_eq!(b.as_ptr() as usize % PAYLOAD_ALIGN, 0);
+            b[len - 1] = 7;
+            let lent = std::mem::take(&mut b);
+            assert_eq!(b.len(), 0);
+            assert_eq!(lent[len - 1], 7);
+        }
     }
 }

@@ -774,16 +774,28 @@ pub struct Translation {
     now_us: i64,
     /// Drift of the offset, seconds per second.
     drift: f64,
+    /// Timestamps at most this many microseconds old (or ahead) move by less than half a
+    /// microsecond of drift, so they skip the floating-point step (which for a live stream,
+    /// whose timestamps are fresh, is nearly always).
+    drift_free_age_us: i64,
 }
 
 impl Translation {
     fn new(offset_us: i64, now_us: i64, drift: f64) -> Translation {
+        // |drift × age| < 0.5 for every |age| ≤ 0.5 / |drift|; the margin keeps the
+        // floating-point product (relative error ~1e-16) below one half as well.
+        let drift_free_age_us = if drift == 0.0 {
+            i64::MAX
+        } else {
+            (0.5 / drift.abs() * (1.0 - 1e-9)).min(i64::MAX as f64 / 2.0) as i64
+        };
         Translation {
             offset_us,
             offset_sec: offset_us.div_euclid(1_000_000),
             offset_usec: offset_us.rem_euclid(1_000_000),
             now_us,
             drift,
+            drift_free_age_us,
         }
     }
 
@@ -800,13 +812,12 @@ impl Translation {
             .saturating_add(remote.usec);
         let age = self
             .now_us
-            .saturating_sub(remote_us.saturating_sub(self.offset_us)) as f64;
+            .saturating_sub(remote_us.saturating_sub(self.offset_us));
         // The offset was smaller by drift × age when the timestamp was taken.
-        let back = self.drift * age;
-        let back = if back >= 0.0 {
-            (back + 0.5) as i64
+        let back = if age.unsigned_abs() <= self.drift_free_age_us as u64 {
+            0
         } else {
-            (back - 0.5) as i64
+            drift_back(self.drift, age)
         };
         let usec = remote.usec - self.offset_usec + back;
         let sec = remote.sec.saturating_sub(self.offset_sec);
@@ -820,6 +831,17 @@ impl Translation {
         } else {
             TimeVal::from_micros(sec.saturating_mul(1_000_000).saturating_add(usec))
         }
+    }
+}
+
+/// `drift × age` rounded to whole microseconds (halves away from zero, as `f64::round`,
+/// without its library call).
+fn drift_back(drift: f64, age_us: i64) -> i64 {
+    let back = drift * age_us as f64;
+    if back >= 0.0 {
+        (back + 0.5) as i64
+    } else {
+        (back - 0.5) as i64
     }
 }
 

@@ -393,3 +393,45 @@ fn drift_is_bounded_by_every_pair_of_samples() {
     let close = Sample { at: 0.0005, ..b };
     assert_eq!(drift_bounds(&a, &close), None);
 }
+
+/// The integer shortcut for fresh timestamps gives exactly what the floating-point rule gives,
+/// on both sides of its age limit, for drifts from none to far beyond any real clock's.
+#[test]
+fn translating_fresh_timestamps_skips_only_drift_that_rounds_to_nothing() {
+    let reference = |t: &Translation, remote: TimeVal| {
+        let remote_us = remote.sec * 1_000_000 + remote.usec;
+        let age = (t.now_us - (remote_us - t.offset_us)) as f64;
+        let back = (t.drift * age).round() as i64;
+        TimeVal::from_micros(remote_us - t.offset_us + back)
+    };
+    let now_us = 1_700_000_000_000_000i64;
+    let mut checked = 0;
+    for drift in [0.0, 1e-9, 3.7e-7, -2.5e-6, 1e-5, -1e-4, 5e-4, 0.01, -0.3] {
+        for offset_us in [0i64, 123_456_789, -987_654_321] {
+            let t = Translation::new(offset_us, now_us, drift);
+            let limit = t.drift_free_age_us.min(1 << 40);
+            for age in [
+                0,
+                1,
+                -1,
+                999,
+                limit - 1,
+                limit,
+                limit + 1,
+                -limit,
+                -limit - 1,
+                2 * limit + 3,
+            ] {
+                // A timestamp whose translation lies `age` µs before `now_us`.
+                let remote = TimeVal::from_micros(now_us - age + offset_us);
+                assert_eq!(
+                    t.remote_to_local(remote),
+                    reference(&t, remote),
+                    "drift {drift}, offset {offset_us} µs, age {age} µs"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 9 * 3 * 10);
+}

@@ -35,6 +35,7 @@ use std::collections::VecDeque;
 use std::net::{Ipv4Addr, SocketAddrV4};
 use std::time::Instant;
 
+use super::buffers::PayloadBuf;
 use super::client::ClientSchedule;
 use super::endpoint::{Endpoint, LogSink, Phase};
 use super::names::Names;
@@ -105,7 +106,7 @@ pub struct Session {
     pub(crate) queue: VecDeque<Delivery>,
     pub(crate) io: VecDeque<IoRequest>,
     /// Payload of the last delivered message.
-    pub(crate) scratch: Vec<u8>,
+    pub(crate) scratch: PayloadBuf,
     /// Local ids newly learned from peers: to be described to every peer (the C++ echo).
     pub(crate) to_describe: Vec<(bool, i32)>,
     cursor: usize,
@@ -123,6 +124,9 @@ pub struct Session {
     /// Input arrived (or a peer's budget was renewed) since a poll last found nothing to
     /// deliver: lets [`poll_delivery`](Session::poll_delivery) answer "nothing" without a walk.
     pub(crate) input_pending: bool,
+    /// Why the peer whose message is being handled must be dropped: set by the (rare) refusals
+    /// of message handling, taken at once by the receive walk.
+    pub(crate) refusal: Option<String>,
     /// [`poll_timeout`](Session::poll_timeout)'s answer while nothing that sets a deadline has
     /// changed (`None`: work it out again). Every pass asks; few passes change it.
     pub(crate) timeout_cache: std::cell::Cell<Option<Option<Instant>>>,
@@ -147,7 +151,7 @@ impl Session {
             limits,
             queue: VecDeque::with_capacity(64),
             io: VecDeque::with_capacity(16),
-            scratch: vec![0; wire::MAX_TCP_PADDED_PAYLOAD],
+            scratch: PayloadBuf::new(wire::MAX_TCP_PADDED_PAYLOAD),
             to_describe: Vec::with_capacity(16),
             cursor: 0,
             connected: 0,
@@ -159,6 +163,7 @@ impl Session {
             names_refused: 0,
             backlogged: None,
             input_pending: true,
+            refusal: None,
             timeout_cache: std::cell::Cell::new(None),
             clock_ids: None,
             clock_names_seen: false,
@@ -399,12 +404,12 @@ impl Session {
 
     /// Takes the scratch buffer (to dispatch from it without borrowing the session); give it
     /// back with [`restore_scratch`](Self::restore_scratch). Allocation-free.
-    pub fn take_scratch(&mut self) -> Vec<u8> {
+    pub fn take_scratch(&mut self) -> PayloadBuf {
         std::mem::take(&mut self.scratch)
     }
 
     /// Returns the buffer [`take_scratch`](Self::take_scratch) lent.
-    pub fn restore_scratch(&mut self, buf: Vec<u8>) {
+    pub fn restore_scratch(&mut self, buf: PayloadBuf) {
         self.scratch = buf;
     }
 }

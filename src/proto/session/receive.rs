@@ -18,16 +18,6 @@ enum Via {
     Log,
 }
 
-/// What handling one message led to.
-enum Outcome {
-    /// Deliver this.
-    Deliver(Delivery),
-    /// Nothing to deliver; carry on.
-    Continue,
-    /// The peer broke the protocol: drop it with this reason.
-    Drop(String),
-}
-
 impl Session {
     /// The next thing to deliver, or `None` when everything buffered has been consumed (the
     /// shell should then read more for the peers that want it).
@@ -71,12 +61,13 @@ impl Session {
                 if p.budget >= self.limits.max_messages_per_peer_per_loop {
                     continue;
                 }
-                if let Some(d) = self.next_from_peer(now, i) {
+                let d = self.next_from_peer(now, i);
+                if d.is_some() {
                     self.cursor = i;
                     if let Some(p) = self.peers[i].as_mut() {
                         p.budget += 1;
                     }
-                    return Some(d);
+                    return d;
                 }
                 if !self.queue.is_empty() || !self.to_describe.is_empty() {
                     produced = true;
@@ -111,19 +102,22 @@ impl Session {
                 Some(Ok((h, payload))) => {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
-                    match self.handle_message(slot, h, len, Via::Tcp, now) {
-                        Outcome::Deliver(d) => return Some(d),
-                        Outcome::Drop(reason) => return self.drop_for(now, slot, reason),
-                        Outcome::Continue => {
-                            if self.clock_names_seen && self.clock_ids.is_none() {
-                                self.ensure_clock_ids(now.now());
-                            }
-                            if !self.queue.is_empty() || !self.to_describe.is_empty() {
-                                return None;
-                            }
-                            continue;
-                        }
+                    // Returned as built (a delivery copied on its way out would be read
+                    // back before its stores land: see handle_message).
+                    let d = self.handle_message(slot, h, len, Via::Tcp, now);
+                    if d.is_some() {
+                        return d;
                     }
+                    if let Some(reason) = self.refusal.take() {
+                        return self.drop_for(now, slot, reason);
+                    }
+                    if self.clock_names_seen && self.clock_ids.is_none() {
+                        self.ensure_clock_ids(now.now());
+                    }
+                    if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                        return None;
+                    }
+                    continue;
                 }
                 Some(Err(e)) => return self.malformed_stream(now, slot, e),
                 None => {}
@@ -153,14 +147,15 @@ impl Session {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
                     inbox.advance(advance);
-                    match self.handle_message(slot, h, len, Via::Udp, now) {
-                        Outcome::Deliver(d) => return Some(d),
-                        Outcome::Drop(reason) => return self.drop_for(now, slot, reason),
-                        Outcome::Continue => {
-                            if !self.queue.is_empty() || !self.to_describe.is_empty() {
-                                return None;
-                            }
-                        }
+                    let d = self.handle_message(slot, h, len, Via::Udp, now);
+                    if d.is_some() {
+                        return d;
+                    }
+                    if let Some(reason) = self.refusal.take() {
+                        return self.drop_for(now, slot, reason);
+                    }
+                    if !self.queue.is_empty() || !self.to_describe.is_empty() {
+                        return None;
                     }
                 }
                 Some(Err(e)) => return self.malformed_datagram(slot, e),
@@ -289,10 +284,12 @@ impl Session {
                 type_id: due.header.type_id,
                 seq: 0,
             };
-            match self.handle_message(0, h, len, Via::Log, now) {
-                Outcome::Deliver(d) => return Some(d),
-                Outcome::Drop(text) => self.notice(Severity::Warning, text),
-                Outcome::Continue => {}
+            let d = self.handle_message(0, h, len, Via::Log, now);
+            if d.is_some() {
+                return d;
+            }
+            if let Some(text) = self.refusal.take() {
+                self.notice(Severity::Warning, text);
             }
             if !self.to_describe.is_empty() {
                 self.describe_new_names(now.now());
@@ -307,7 +304,13 @@ impl Session {
     /// tables; user messages are translated and returned for delivery.
     ///
     /// Device reports take the short way (`handle_user_message`); system messages, which
-    /// come during set-up, have a function of their own.
+    /// come during set-up, have a function of their own. A refusal (the peer must be
+    /// dropped) is left in `refusal`.
+    ///
+    /// The delivery is returned as it was built, up to the walk's caller: unpacking it from
+    /// another enum on the way (as an earlier version did) copied it with wide loads right
+    /// after its fields were stored one by one, which the CPU cannot forward from its store
+    /// buffer; that stall cost more than the rest of the message's handling.
     #[inline(always)]
     fn handle_message(
         &mut self,
@@ -316,24 +319,23 @@ impl Session {
         len: usize,
         via: Via,
         now: &dyn TimeSource,
-    ) -> Outcome {
+    ) -> Option<Delivery> {
         let Session {
             peers,
             logs,
             scratch,
             limits,
+            refusal,
             ..
         } = self;
-        let Some(p) = peers[slot].as_mut() else {
-            return Outcome::Continue;
-        };
+        let p = peers[slot].as_mut()?;
         if via != Via::Log {
             if let Some(w) = p.log_in.as_mut().or(logs.incoming.as_mut()) {
                 let _ = w.log_message(h.type_id, h.sender, h.time, &scratch[..len]);
             }
         }
         if len > limits.max_message_payload {
-            return oversized(&p.label, len, limits.max_message_payload);
+            return oversized(refusal, &p.label, len, limits.max_message_payload);
         }
         if h.type_id < 0 {
             return self.handle_system_message(slot, h, len, via);
@@ -349,7 +351,7 @@ impl Session {
         h: wire::Header,
         len: usize,
         via: Via,
-    ) -> Outcome {
+    ) -> Option<Delivery> {
         if matches!(
             h.type_id,
             system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION
@@ -362,23 +364,21 @@ impl Session {
             limits,
             ..
         } = self;
-        let Some(p) = peers[slot].as_mut() else {
-            return Outcome::Continue;
-        };
+        let p = peers[slot].as_mut()?;
         let payload = &scratch[..len];
         match h.type_id {
             system::UDP_DESCRIPTION => {
                 if via != Via::Tcp || p.tcp_only {
                     // Only the peer's own TCP stream may set its UDP channel (a datagram could
                     // come from anyone); replayed logs open nothing.
-                    return Outcome::Continue;
+                    return None;
                 }
                 let Ok(host) = system::decode_udp_description(payload) else {
-                    return Outcome::Continue;
+                    return None;
                 };
                 let port = h.sender;
                 if !(1..=65535).contains(&port) {
-                    return Outcome::Continue;
+                    return None;
                 }
                 // The datagrams go to the peer's own address unless the server was set up for
                 // multi-homed clients; a host name is never resolved in the loop.
@@ -390,7 +390,7 @@ impl Session {
                 let addr = std::net::SocketAddrV4::new(ip, port as u16);
                 let id = p.id;
                 self.io.push_back(IoRequest::OpenUdpOut { peer: id, addr });
-                Outcome::Continue
+                None
             }
             system::LOG_DESCRIPTION => {
                 // C++ servers open the named files on the server machine. An unauthenticated
@@ -401,19 +401,19 @@ impl Session {
                          logging requests are refused: log locally with -li/-lo instead",
                         p.label, d.incoming, d.outgoing
                     );
-                    return Outcome::Deliver(Delivery::Notice(Notice {
+                    return Some(Delivery::Notice(Notice {
                         severity: Severity::Warning,
                         text,
                     }));
                 }
-                Outcome::Continue
+                None
             }
             system::DISCONNECT => {
                 p.senders.clear();
                 p.types.clear();
-                Outcome::Continue
+                None
             }
-            _ => Outcome::Continue,
+            _ => None,
         }
     }
 
@@ -427,22 +427,20 @@ impl Session {
         len: usize,
         via: Via,
         now: &dyn TimeSource,
-    ) -> Outcome {
+    ) -> Option<Delivery> {
         let Session {
             peers, clock_ids, ..
         } = self;
-        let Some(p) = peers[slot].as_mut() else {
-            return Outcome::Continue;
-        };
+        let p = peers[slot].as_mut()?;
         let local_type = p.types.lookup(h.type_id);
         if local_type < 0 {
-            return Outcome::Continue; // never described: ignored, as C++ does
+            return None; // never described: ignored, as C++ does
         }
         if let Some(ids) = clock_ids.filter(|ids| ids.is_clock_type(local_type)) {
             if via != Via::Log {
                 return self.handle_clock_message(slot, ids, local_type, len, now);
             }
-            return Outcome::Continue;
+            return None;
         }
         let local_sender = p.senders.lookup(h.sender);
         // In local time when the peer's clock is known (a cheap test first: a peer that
@@ -463,7 +461,7 @@ impl Session {
             }
             _ => h.time,
         };
-        Outcome::Deliver(Delivery::Message {
+        Some(Delivery::Message {
             time,
             sender_time: h.time,
             sender: local_sender,
@@ -473,7 +471,7 @@ impl Session {
     }
 
     /// A sender or type description: learn the name, map the peer's id to ours.
-    fn handle_description(&mut self, slot: usize, h: wire::Header, len: usize) -> Outcome {
+    fn handle_description(&mut self, slot: usize, h: wire::Header, len: usize) -> Option<Delivery> {
         let is_sender = h.type_id == system::SENDER_DESCRIPTION;
         let kind = if is_sender { "sender" } else { "type" };
         let Session {
@@ -485,22 +483,24 @@ impl Session {
             queue,
             names_refused,
             clock_names_seen,
+            refusal,
             ..
         } = self;
-        let Some(p) = peers[slot].as_mut() else {
-            return Outcome::Continue;
-        };
+        let p = peers[slot].as_mut()?;
         // The id first: a description with an id no C++ peer could send is a protocol error,
         // and must not leave its name behind in our table.
         if !RemoteNames::valid_id(h.sender) {
-            return Outcome::Drop(format!(
-                "{} described id {} outside VRPN's 0..{MAX_IDS} range",
-                p.label, h.sender
-            ));
+            return refuse(
+                refusal,
+                format!(
+                    "{} described id {} outside VRPN's 0..{MAX_IDS} range",
+                    p.label, h.sender
+                ),
+            );
         }
         let name = match system::decode_description_bytes(&scratch[..len]) {
             Ok(n) => n,
-            Err(e) => return Outcome::Drop(format!("bad description from {}: {e}", p.label)),
+            Err(e) => return refuse(refusal, format!("bad description from {}: {e}", p.label)),
         };
         if !is_sender
             && (name == wire::payload::clock::QUERY.as_bytes()
@@ -526,10 +526,13 @@ impl Session {
         if rebinds {
             remote.described += 1;
             if remote.described > limits.max_names_per_peer {
-                return Outcome::Drop(format!(
-                    "{} described more than {} {kind} names (Limits::max_names_per_peer)",
-                    p.label, limits.max_names_per_peer
-                ));
+                return refuse(
+                    refusal,
+                    format!(
+                        "{} described more than {} {kind} names (Limits::max_names_per_peer)",
+                        p.label, limits.max_names_per_peer
+                    ),
+                );
             }
         }
         let room = table.learned_count() < MAX_IDS - RESERVED_FOR_LOCAL;
@@ -563,10 +566,13 @@ impl Session {
                         text,
                     }));
                 }
-                return Outcome::Continue;
+                return None;
             }
             Err(e) => {
-                return Outcome::Drop(format!("{} described a name we cannot hold: {e}", p.label))
+                return refuse(
+                    refusal,
+                    format!("{} described a name we cannot hold: {e}", p.label),
+                )
             }
         };
         remote.bind(h.sender, local);
@@ -577,10 +583,10 @@ impl Session {
             let own = !p.senders_complete || !names.senders.is_registered(local);
             let device = name != crate::wire::payload::clock::SENDER.as_bytes();
             if own && device && p.offered.insert(local) {
-                return Outcome::Deliver(Delivery::PeerSender(local));
+                return Some(Delivery::PeerSender(local));
             }
         }
-        Outcome::Continue
+        None
     }
 
     /// A clock query (answered to this peer only, with the time it arrived and the time the
@@ -592,15 +598,13 @@ impl Session {
         local_type: i32,
         len: usize,
         now: &dyn TimeSource,
-    ) -> Outcome {
+    ) -> Option<Delivery> {
         let payload = &self.scratch[..len];
-        let Some(p) = self.peers[slot].as_mut() else {
-            return Outcome::Continue;
-        };
+        let p = self.peers[slot].as_mut()?;
         if local_type == ids.query {
             // A foreign or future layout is ignored, never a reason to drop the peer.
             let Ok(q) = Query::decode(payload) else {
-                return Outcome::Continue;
+                return None;
             };
             let at = now.now().wall;
             let reply = Reply::answer(&q, at, at);
@@ -615,7 +619,7 @@ impl Session {
             );
         } else if local_type == ids.reply {
             let Ok(r) = Reply::decode(payload) else {
-                return Outcome::Continue;
+                return None;
             };
             if let Some(c) = p.clock.as_deref_mut() {
                 c.handle_reply(&r, now.now());
@@ -623,16 +627,33 @@ impl Session {
                 self.timeouts_changed();
             }
         }
-        Outcome::Continue
+        None
     }
 }
 
-/// The outcome for a message over [`Limits::max_message_payload`](crate::Limits).
+/// Records why the peer must be dropped (taken by the caller from `Session::refusal`); nothing
+/// to deliver.
 #[cold]
 #[inline(never)]
-fn oversized(label: &str, len: usize, limit: usize) -> Outcome {
-    Outcome::Drop(format!(
-        "{label} sent a {len}-byte message; the limit is {limit} bytes \
-         (Limits::max_message_payload)"
-    ))
+fn refuse(refusal: &mut Option<String>, reason: String) -> Option<Delivery> {
+    *refusal = Some(reason);
+    None
+}
+
+/// The refusal of a message over [`Limits::max_message_payload`](crate::Limits).
+#[cold]
+#[inline(never)]
+fn oversized(
+    refusal: &mut Option<String>,
+    label: &str,
+    len: usize,
+    limit: usize,
+) -> Option<Delivery> {
+    refuse(
+        refusal,
+        format!(
+            "{label} sent a {len}-byte message; the limit is {limit} bytes \
+             (Limits::max_message_payload)"
+        ),
+    )
 }

@@ -5,7 +5,9 @@ use super::{Kind, Session};
 use crate::proto::client::Failure;
 use crate::proto::endpoint::{Channel, Phase};
 use crate::proto::names::NameLimit;
-use crate::proto::{ConnectionEvent, Delivery, IoRequest, PeerId, Severity};
+use std::collections::VecDeque;
+
+use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, PeerId, Severity};
 use crate::time::{Now, TimeVal};
 use crate::wire::{class, system};
 
@@ -83,6 +85,7 @@ impl Session {
     /// overflowed: the caller then calls [`drop_backlogged`](Self::drop_backlogged) with the
     /// time (the only path here that needs it). A peer that falls behind sheds unreliable
     /// messages first, with a notice.
+    #[inline]
     pub fn pack(
         &mut self,
         time: TimeVal,
@@ -91,37 +94,48 @@ impl Session {
         payload: &[u8],
         class_of_service: u32,
     ) -> bool {
-        self.log_outgoing(type_id, sender, time, payload);
-        let mut shedding = None;
+        // Inline: an in-process connection has no log and no peer, and this is all it pays.
+        if self.logs.outgoing.is_some() {
+            self.log_outgoing(type_id, sender, time, payload);
+        }
+        if !self.peers.is_empty() {
+            self.pack_to_peers(time, sender, type_id, payload, class_of_service);
+        }
+        self.backlogged.is_some()
+    }
+
+    fn pack_to_peers(
+        &mut self,
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        payload: &[u8],
+        class_of_service: u32,
+    ) {
         let replay = self.is_replay();
-        for p in self.peers.iter_mut().flatten() {
+        let Session {
+            peers,
+            backlogged,
+            queue,
+            ..
+        } = self;
+        for p in peers.iter_mut().flatten() {
             if replay && p.id.slot == 0 {
                 continue;
             }
             match p.pack(time, sender, type_id, payload, class_of_service) {
                 Err(_) => {
-                    if self.backlogged.is_none() {
-                        self.backlogged = Some(p.id);
+                    if backlogged.is_none() {
+                        *backlogged = Some(p.id);
                     }
                 }
                 // Say so once per peer, when it first sheds unreliable traffic.
                 Ok(Channel::Discarded) if p.unreliable_dropped == 1 => {
-                    shedding = Some((p.label.clone(), p.tx.pending_len()));
+                    falling_behind(queue, &p.label, p.tx.pending_len());
                 }
                 Ok(_) => {}
             }
         }
-        if let Some((who, pending)) = shedding {
-            self.notice(
-                Severity::Warning,
-                format!(
-                    "{who} is falling behind ({pending} bytes of output pending): dropping \
-                     its unreliable messages while the backlog exceeds half of \
-                     Limits::max_pending_output"
-                ),
-            );
-        }
-        self.backlogged.is_some()
     }
 
     /// Drops the peer whose reliable backlog overflowed in [`pack`](Self::pack).
@@ -213,4 +227,17 @@ impl Session {
         }
         self.note_state();
     }
+}
+
+/// The notice a peer gets when it starts shedding unreliable traffic (once per peer).
+#[cold]
+#[inline(never)]
+fn falling_behind(queue: &mut VecDeque<Delivery>, who: &str, pending: usize) {
+    queue.push_back(Delivery::Notice(Notice {
+        severity: Severity::Warning,
+        text: format!(
+            "{who} is falling behind ({pending} bytes of output pending): dropping its \
+             unreliable messages while the backlog exceeds half of Limits::max_pending_output"
+        ),
+    }));
 }

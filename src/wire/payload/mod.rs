@@ -124,6 +124,7 @@ macro_rules! fixed_payload {
                 " `at_least`: extra bytes are ignored)."
             )]
             #[allow(unused_assignments)]
+            #[inline]
             pub fn decode(buf: &[u8]) -> $crate::wire::Result<Self> {
                 $crate::wire::payload::$check(
                     buf,
@@ -144,6 +145,7 @@ macro_rules! fixed_payload {
 
             /// Writes the payload at the start of `out` (at least `LEN` bytes); returns `LEN`.
             #[allow(unused_assignments)]
+            #[inline]
             pub fn encode(&self, out: &mut [u8]) -> usize {
                 #[allow(unused_variables)]
                 let out = &mut out[..Self::LEN];
