@@ -604,8 +604,9 @@ impl Shell {
             {
                 continue;
             }
-            if let Some(queue) = session.udp_outbox(id) {
-                send_udp(p.udp_out.as_ref(), queue);
+            match session.udp_outbox(id) {
+                Some(queue) if !queue.is_empty() => send_udp(p.udp_out.as_ref(), queue),
+                _ => {}
             }
         }
         if session.has_io() {

@@ -39,6 +39,7 @@ pub(crate) enum Channel {
 
 /// Remote id → local id for one kind of name, with what the peer holds of our name table.
 #[derive(Debug, Default)]
+#[repr(C)] // `map`, read per message, first
 pub(crate) struct RemoteNames {
     /// Remote id → local id (−1 when not described or not mapped).
     map: Vec<i32>,
@@ -85,59 +86,64 @@ impl RemoteNames {
 }
 
 /// The sans-IO part of one peer.
+///
+/// Laid out by hand (`repr(C)`): the fields every received message touches come first, so that
+/// a report costs a few cache lines of this struct rather than one line per field (the
+/// compiler's order spread them over ten). The set-up and bookkeeping fields follow.
+#[repr(C)]
 pub(crate) struct Endpoint {
-    pub(crate) id: PeerId,
     pub(crate) phase: Phase,
-    /// No UDP channel in either direction (TCP-only path).
-    pub(crate) tcp_only: bool,
-    /// The peer's TCP address.
-    pub(crate) addr: SocketAddrV4,
-    /// Our end of the TCP connection (the address we announce for UDP).
-    pub(crate) local: Option<SocketAddrV4>,
-    /// The peer's address as text, for messages.
-    pub(crate) label: String,
-    cookie: [u8; COOKIE_LEN],
-    cookie_len: usize,
-    /// Reassembles the TCP stream; made when the handshake completes.
-    pub(crate) rx: Option<StreamDecoder>,
-    /// Inbound datagrams; made when our UDP socket for this peer is bound.
-    pub(crate) udp_rx: Option<DatagramInbox>,
-    pub(crate) tx: TxBuffer,
-    pub(crate) udp_tx: DatagramQueue,
     /// The peer announced a UDP port and our outbound socket is connected to it.
     pub(crate) udp_ready: bool,
-    pub(crate) senders: RemoteNames,
-    pub(crate) types: RemoteNames,
-    pub(crate) seq_tcp: u32,
-    pub(crate) seq_udp: u32,
-    /// Version text of the peer's cookie once read.
-    pub(crate) peer_version: Option<String>,
-    /// When the peer must have reached the next phase (connect, then handshake).
-    pub(crate) deadline: Option<Instant>,
-    /// When the peer completed its handshake.
-    pub(crate) connected_at: Option<Instant>,
-    /// Messages taken from this peer in the current pass (fairness).
-    pub(crate) budget: usize,
-    /// Unreliable messages not queued because the reliable backlog was past half its limit.
-    pub(crate) unreliable_dropped: u64,
+    /// No UDP channel in either direction (TCP-only path).
+    pub(crate) tcp_only: bool,
     /// The peer has described a type: its own sender table is complete (C++ describes every
     /// sender, then every type), so senders described after this are echoes of names other
     /// peers taught it, or later registrations.
     pub(crate) senders_complete: bool,
-    /// Local sender ids this peer offers (described in its own table).
-    pub(crate) offered: IdSet,
-    /// Datagrams dropped because they came from another address than the peer's.
-    pub(crate) foreign_datagrams: u64,
-    /// This peer's incoming log (`vrpn_server -li`: one file per client).
-    pub(crate) log_in: Option<LogSink>,
     /// A call-back connect started by a connection request (coalesced per address).
     pub(crate) callback: bool,
+    pub(crate) seq_tcp: u32,
+    pub(crate) seq_udp: u32,
+    /// The peer's TCP address.
+    pub(crate) addr: SocketAddrV4,
+    /// Messages taken from this peer in the current pass (fairness).
+    pub(crate) budget: usize,
     /// Clock synchronisation with this peer, once it is connected (and sync is on).
     pub(crate) clock: Option<Box<super::clock::ClockSync>>,
     /// The clock translation in use and the moment until which it holds, so that messages
     /// work out the estimate only a few times a second. Cleared when a reply changes the
     /// estimate.
     pub(crate) clock_pass: Option<(Option<super::clock::Translation>, std::time::Instant)>,
+    /// This peer's incoming log (`vrpn_server -li`: one file per client).
+    pub(crate) log_in: Option<LogSink>,
+    /// Reassembles the TCP stream; made when the handshake completes.
+    pub(crate) rx: Option<StreamDecoder>,
+    /// Inbound datagrams; made when our UDP socket for this peer is bound.
+    pub(crate) udp_rx: Option<DatagramInbox>,
+    pub(crate) tx: TxBuffer,
+    pub(crate) udp_tx: DatagramQueue,
+    pub(crate) senders: RemoteNames,
+    pub(crate) types: RemoteNames,
+    pub(crate) id: PeerId,
+    /// Our end of the TCP connection (the address we announce for UDP).
+    pub(crate) local: Option<SocketAddrV4>,
+    /// The peer's address as text, for messages.
+    pub(crate) label: String,
+    cookie: [u8; COOKIE_LEN],
+    cookie_len: usize,
+    /// Version text of the peer's cookie once read.
+    pub(crate) peer_version: Option<String>,
+    /// When the peer must have reached the next phase (connect, then handshake).
+    pub(crate) deadline: Option<Instant>,
+    /// When the peer completed its handshake.
+    pub(crate) connected_at: Option<Instant>,
+    /// Unreliable messages not queued because the reliable backlog was past half its limit.
+    pub(crate) unreliable_dropped: u64,
+    /// Local sender ids this peer offers (described in its own table).
+    pub(crate) offered: IdSet,
+    /// Datagrams dropped because they came from another address than the peer's.
+    pub(crate) foreign_datagrams: u64,
 }
 
 impl Endpoint {

@@ -447,17 +447,16 @@ impl Session {
         // never answered, a C++ one, costs nothing here).
         let time = match p.clock.as_deref() {
             Some(c) if c.has_estimate() => {
-                let translation = match p.clock_pass {
-                    Some((t, _)) => t,
-                    None => {
-                        let (t, until) = c.translation_until(now.now());
-                        p.clock_pass = Some((t, until));
-                        // Its limit is a deadline of the session.
-                        self.timeout_cache.set(None);
-                        t
-                    }
-                };
-                translation.map_or(h.time, |t| t.remote_to_local(h.time))
+                if p.clock_pass.is_none() {
+                    p.clock_pass = Some(c.translation_until(now.now()));
+                    // Its limit is a deadline of the session.
+                    self.timeout_cache.set(None);
+                }
+                // Used in place: a copy of the translation per message costs more than using it.
+                match &p.clock_pass {
+                    Some((Some(t), _)) => t.remote_to_local(h.time),
+                    _ => h.time,
+                }
             }
             _ => h.time,
         };
