@@ -147,6 +147,13 @@ pub(crate) struct Endpoint {
 }
 
 impl Endpoint {
+    /// Nothing received from this peer is left to walk: no stream bytes, no datagram.
+    #[inline]
+    pub(crate) fn input_drained(&self) -> bool {
+        self.rx.as_ref().map_or(true, |r| r.buffered() == 0)
+            && self.udp_rx.as_ref().map_or(true, |i| i.is_drained())
+    }
+
     pub(crate) fn new(id: PeerId, tcp_only: bool, addr: SocketAddrV4, tx_limit: usize) -> Endpoint {
         Endpoint {
             id,

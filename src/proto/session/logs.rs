@@ -46,10 +46,14 @@ impl Session {
     }
 
     /// Writes a bounded amount of buffered log data (called every pass; never stalls long).
+    #[inline]
     pub fn flush_logs_some(&mut self, max_bytes: usize) {
-        if !self.logs.any {
-            return;
+        if self.logs.any {
+            self.flush_some_of_each_log(max_bytes);
         }
+    }
+
+    fn flush_some_of_each_log(&mut self, max_bytes: usize) {
         let mut err = None;
         for w in self.log_sinks() {
             if w.pending() > 0 {

@@ -74,10 +74,16 @@ impl Session {
     }
 
     /// The earliest time [`handle_timeout`](Self::handle_timeout) has work to do.
+    #[inline]
     pub fn poll_timeout(&self) -> Option<Instant> {
-        if let Some(known) = self.timeout_cache.get() {
-            return known;
+        match self.timeout_cache.get() {
+            Some(known) => known,
+            None => self.timeout_changed(),
         }
+    }
+
+    #[inline(never)]
+    fn timeout_changed(&self) -> Option<Instant> {
         let d = self.work_out_timeout();
         self.timeout_cache.set(Some(d));
         d

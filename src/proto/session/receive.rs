@@ -66,6 +66,11 @@ impl Session {
                     self.cursor = i;
                     if let Some(p) = self.peers[i].as_mut() {
                         p.budget += 1;
+                        // The only peer has nothing more buffered: the next poll need not walk
+                        // (a pass that received one report would otherwise walk twice).
+                        if n == 1 && p.input_drained() {
+                            self.input_pending = false;
+                        }
                     }
                     return d;
                 }
