@@ -39,7 +39,8 @@ pub(crate) fn wall_clock() -> TimeVal {
 pub(crate) struct PassClock {
     in_pass: Cell<bool>,
     now: Cell<Option<Now>>,
-    /// The wall clock read by [`wall`](Self::wall) before anything needed both clocks.
+    /// The pass's wall-clock reading (whether [`wall`](Self::wall) or
+    /// [`now`](TimeSource::now) read it).
     wall: Cell<Option<TimeVal>>,
 }
 
@@ -75,9 +76,6 @@ impl PassClock {
     /// [`now`](TimeSource::now)'s `wall` within one pass, whichever was asked first.
     #[inline]
     pub(crate) fn wall(&self) -> TimeVal {
-        if let Some(n) = self.now.get() {
-            return n.wall;
-        }
         match self.wall.get() {
             Some(w) if self.in_pass.get() => w,
             _ => self.read_wall(),
@@ -104,8 +102,9 @@ impl TimeSource for PassClock {
             None => {
                 let mut n = clock();
                 // A pass that already stamped arrivals keeps that wall-clock reading.
-                if let Some(w) = self.wall.get() {
-                    n.wall = w;
+                match self.wall.get() {
+                    Some(w) => n.wall = w,
+                    None => self.wall.set(Some(n.wall)),
                 }
                 self.now.set(Some(n));
                 n

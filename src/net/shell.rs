@@ -71,6 +71,9 @@ struct PeerIo {
     tcp: Sock<TcpStream>,
     connecting: bool,
     udp_in: Option<Sock<UdpSocket>>,
+    /// The address `udp_in` is connected to (`IoRequest::PinUdpSource`): every datagram comes
+    /// from there, and receiving need not ask the kernel for sources.
+    udp_source: Option<SocketAddrV4>,
     udp_out: Option<UdpSocket>,
 }
 
@@ -149,6 +152,7 @@ fn put_peer(
         tcp,
         connecting,
         udp_in: None,
+        udp_source: None,
         udp_out: None,
     });
 }
@@ -519,6 +523,17 @@ impl Shell {
                     };
                     session.handle_udp_out(clock.now(), peer, ok);
                 }
+                IoRequest::PinUdpSource { peer, source } => {
+                    // Best effort: a socket that cannot be connected keeps receiving with
+                    // sources, and the session keeps checking them.
+                    if let Some(p) = self.peer_io(peer) {
+                        if let Some(u) = &p.udp_in {
+                            if u.sock.connect(SocketAddr::V4(source)).is_ok() {
+                                p.udp_source = Some(source);
+                            }
+                        }
+                    }
+                }
                 IoRequest::Close { peer } => {
                     if let Some(io) = self
                         .peers
@@ -577,7 +592,7 @@ impl Shell {
             }
             if let Some(u) = &p.udp_in {
                 if u.ready.readable() {
-                    got |= read_udp(u, p.id, session);
+                    got |= read_udp(u, p.udp_source, p.id, session);
                 }
             }
         }
@@ -655,11 +670,16 @@ fn read_tcp(
 
 /// One batch of datagrams from a peer's UDP socket into the session; true when any came.
 #[inline(never)]
-fn read_udp(u: &Sock<UdpSocket>, id: PeerId, session: &mut Session) -> bool {
+fn read_udp(
+    u: &Sock<UdpSocket>,
+    source: Option<SocketAddrV4>,
+    id: PeerId,
+    session: &mut Session,
+) -> bool {
     let Some(inbox) = session.udp_inbox(id) else {
         return false;
     };
-    match recv_datagrams(&u.sock, inbox) {
+    match recv_datagrams(&u.sock, inbox, source) {
         Ok(n) => {
             // As `handle_datagrams`, without looking the peer up again.
             inbox.filled(n);

@@ -142,6 +142,8 @@ pub(crate) struct Endpoint {
     pub(crate) unreliable_dropped: u64,
     /// Local sender ids this peer offers (described in its own table).
     pub(crate) offered: IdSet,
+    /// The shell was asked to pin the peer's UDP source (`IoRequest::PinUdpSource`).
+    pub(crate) udp_source_pinned: bool,
     /// Datagrams dropped because they came from another address than the peer's.
     pub(crate) foreign_datagrams: u64,
 }
@@ -181,6 +183,7 @@ impl Endpoint {
             senders_complete: false,
             offered: IdSet::default(),
             foreign_datagrams: 0,
+            udp_source_pinned: false,
             log_in: None,
             callback: false,
             clock: None,

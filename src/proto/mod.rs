@@ -189,6 +189,16 @@ pub enum IoRequest {
         /// The peer's announced UDP address.
         addr: SocketAddrV4,
     },
+    /// The peer's datagrams come from `source`: the shell may connect `peer`'s inbound UDP
+    /// socket to it, so that the kernel drops anyone else's datagrams and no longer reports
+    /// each datagram's source (what the session checks otherwise). Asked once per peer, for
+    /// the first datagram that passed the source check. Nothing to report back.
+    PinUdpSource {
+        /// The peer.
+        peer: PeerId,
+        /// Where its datagrams come from.
+        source: SocketAddrV4,
+    },
     /// Close every socket of `peer` (the session has forgotten it).
     Close {
         /// The peer.

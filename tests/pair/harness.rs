@@ -407,6 +407,8 @@ impl Pair {
                     self.side(who).udp_out = true;
                     self.side(who).session.handle_udp_out(now, peer, true);
                 }
+                // Nothing to connect in memory: the link never delivers a stranger's datagram.
+                (_, IoRequest::PinUdpSource { .. }) => {}
                 (_, IoRequest::Close { peer }) => {
                     let Some(c) = self.conn.as_mut() else {
                         continue;

@@ -134,6 +134,7 @@ impl Session {
             }
             let peer_ip = *p.addr.ip();
             let named = self.limits.callback_to_named_address;
+            let pin = !named && !p.udp_source_pinned;
             let inbox = p.udp_rx.as_mut()?;
             if inbox.is_drained() {
                 return None;
@@ -143,6 +144,11 @@ impl Session {
                     Some(d) => return d,
                     None => continue,
                 }
+            }
+            if pin {
+                let source = inbox.current_source();
+                self.pin_udp_source(slot, source);
+                continue;
             }
             let dg = inbox.current();
             let mut it = wire::DatagramMessages::new(dg);
@@ -229,6 +235,18 @@ impl Session {
             return Some(self.queue.pop_front());
         }
         None
+    }
+
+    /// The first datagram from the peer's own address: ask the shell to pin its source (see
+    /// [`IoRequest::PinUdpSource`]), once.
+    #[cold]
+    #[inline(never)]
+    fn pin_udp_source(&mut self, slot: usize, source: std::net::SocketAddrV4) {
+        if let Some(p) = self.peers[slot].as_mut() {
+            p.udp_source_pinned = true;
+            let peer = p.id;
+            self.io.push_back(IoRequest::PinUdpSource { peer, source });
+        }
     }
 
     /// A datagram that does not frame: C++ drops the whole connection; we drop the datagram.
@@ -448,22 +466,23 @@ impl Session {
             return None;
         }
         let local_sender = p.senders.lookup(h.sender);
-        // In local time when the peer's clock is known (a cheap test first: a peer that
-        // never answered, a C++ one, costs nothing here).
-        let time = match p.clock.as_deref() {
-            Some(c) if c.has_estimate() => {
-                if p.clock_pass.is_none() {
-                    p.clock_pass = Some(c.translation_until(now.now()));
+        // In local time when the peer's clock is known. The translation of this stretch of
+        // time comes first (used in place; the session clears it when a reply changes the
+        // estimate or its reuse limit passes); only without one is the estimator asked, a
+        // cheap test for a peer that never answered (a C++ one).
+        let time = match &p.clock_pass {
+            Some((Some(t), _)) => t.remote_to_local(h.time),
+            Some((None, _)) => h.time,
+            None => match p.clock.as_deref() {
+                Some(c) if c.has_estimate() => {
+                    let (t, until) = c.translation_until(now.now());
+                    p.clock_pass = Some((t, until));
                     // Its limit is a deadline of the session.
                     self.timeout_cache.set(None);
+                    t.map_or(h.time, |t| t.remote_to_local(h.time))
                 }
-                // Used in place: a copy of the translation per message costs more than using it.
-                match &p.clock_pass {
-                    Some((Some(t), _)) => t.remote_to_local(h.time),
-                    _ => h.time,
-                }
-            }
-            _ => h.time,
+                _ => h.time,
+            },
         };
         Some(Delivery::Message {
             time,
