@@ -6,7 +6,7 @@
 //! nothing) and called with the list released. A callback that is already running is skipped
 //! rather than re-entered, which is what makes a double borrow impossible at run time.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -171,6 +171,8 @@ struct HandlerEntry {
 pub(crate) struct HandlerTable {
     by_type: RefCell<Vec<Vec<HandlerEntry>>>,
     any_type: RefCell<Vec<HandlerEntry>>,
+    /// `any_type` has entries (a flag: tested for every message, and almost always false).
+    any_type_used: Cell<bool>,
 }
 
 impl HandlerTable {
@@ -195,7 +197,10 @@ impl HandlerTable {
                 }
                 by_type[idx].push(entry);
             }
-            None => self.any_type.borrow_mut().push(entry),
+            None => {
+                self.any_type.borrow_mut().push(entry);
+                self.any_type_used.set(true);
+            }
         }
         id
     }
@@ -210,6 +215,7 @@ impl HandlerTable {
         let mut any = self.any_type.borrow_mut();
         let before = any.len();
         any.retain(|e| e.id != id);
+        self.any_type_used.set(!any.is_empty());
         found || any.len() != before
     }
 
@@ -246,6 +252,9 @@ impl HandlerTable {
                 }
                 i += 1;
             }
+        }
+        if !self.any_type_used.get() {
+            return;
         }
         let mut i = 0;
         loop {

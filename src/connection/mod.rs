@@ -70,6 +70,8 @@ struct Inner {
     clock: PassClock,
     /// Local deliveries requested while a handler runs: encoded messages, delivered in order.
     deferred: RefCell<Vec<u8>>,
+    /// `deferred` holds something (a flag: tested after every delivery).
+    any_deferred: Cell<bool>,
     deferred_scratch: RefCell<Vec<u8>>,
     notices: CallbackList<Notice>,
     peer_senders: CallbackList<str>,
@@ -144,6 +146,7 @@ impl Connection {
                 depth: Cell::new(0),
                 clock: PassClock::default(),
                 deferred: RefCell::new(Vec::with_capacity(64 * 1024)),
+                any_deferred: Cell::new(false),
                 deferred_scratch: RefCell::new(Vec::with_capacity(64 * 1024)),
                 notices: CallbackList::default(),
                 peer_senders: CallbackList::default(),
@@ -497,6 +500,7 @@ impl Connection {
     }
 
     fn defer(&self, msg: &Message<'_>) {
+        self.inner.any_deferred.set(true);
         let mut q = self.inner.deferred.borrow_mut();
         q.extend_from_slice(&msg.type_id.0.to_ne_bytes());
         q.extend_from_slice(&msg.sender.0.to_ne_bytes());
@@ -513,7 +517,7 @@ impl Connection {
         self.inner.depth.set(depth + 1);
         self.inner.handlers.dispatch(msg);
         self.inner.depth.set(depth);
-        if depth > 0 || self.inner.deferred.borrow().is_empty() {
+        if depth > 0 || !self.inner.any_deferred.get() {
             // Nested (the outer delivery drains the queue), or the common case: no handler
             // sent anything to local handlers.
             return;
@@ -565,6 +569,7 @@ impl Connection {
             }
         }
         self.inner.deferred.borrow_mut().clear();
+        self.inner.any_deferred.set(false);
     }
 
     // -------------------------------------------------------------- the loop
