@@ -9,7 +9,7 @@
 //! Readiness is edge-triggered (mio registers sockets that way): an owner keeps reading until
 //! `WouldBlock` (or a short read, which proves a stream empty) before it waits again.
 //!
-//! Sockets get their readiness as [`ReadyBits`] shared with the reactor: a poll sets the bits
+//! Sockets get their readiness as `ReadyBits` shared with the reactor: a poll sets the bits
 //! and the owner clears them when a call proves them stale, so a loop pass asks a socket
 //! "readable?" with one load, not a lookup in the reactor (that walk cost a borrow and a slot
 //! lookup per socket per pass). Serial ports [`take`](Reactor::take) theirs, with the wake
