@@ -224,7 +224,7 @@ impl HandlerTable {
     #[inline]
     pub(crate) fn wants_any(&self, type_id: TypeId, sender: SenderId) -> bool {
         let wanted = |l: &Vec<HandlerEntry>| l.iter().any(|e| e.sender.accepts(sender));
-        wanted(&self.any_type.borrow())
+        (self.any_type_used.get() && wanted(&self.any_type.borrow()))
             || self
                 .by_type
                 .borrow()

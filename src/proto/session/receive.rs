@@ -352,7 +352,7 @@ impl Session {
             ..
         } = self;
         let p = peers[slot].as_mut()?;
-        if via != Via::Log {
+        if logs.any && via != Via::Log {
             if let Some(w) = p.log_in.as_mut().or(logs.incoming.as_mut()) {
                 let _ = w.log_message(h.type_id, h.sender, h.time, &scratch[..len]);
             }
