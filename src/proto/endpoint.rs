@@ -85,6 +85,36 @@ impl RemoteNames {
     }
 }
 
+/// The clock translation a peer's messages use for a while (see `Endpoint::clock_pass`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ClockPass {
+    /// `None` while synchronisation is not in effect: times pass unchanged.
+    pub(crate) translation: Option<super::clock::Translation>,
+    /// Until when it may be used (a deadline of the session).
+    pub(crate) until: std::time::Instant,
+    /// The last timestamp translated and its local time: the reports of one frame (every
+    /// sensor of a tracker, every channel of a device) carry the same time.
+    pub(crate) last: Option<(TimeVal, TimeVal)>,
+}
+
+impl ClockPass {
+    /// `remote` in local time.
+    #[inline]
+    pub(crate) fn to_local(&mut self, remote: TimeVal) -> TimeVal {
+        let Some(t) = &self.translation else {
+            return remote;
+        };
+        match self.last {
+            Some((r, local)) if r == remote => local,
+            _ => {
+                let local = t.remote_to_local(remote);
+                self.last = Some((remote, local));
+                local
+            }
+        }
+    }
+}
+
 /// The sans-IO part of one peer.
 ///
 /// Laid out by hand (`repr(C)`): the fields every received message touches come first, so that
@@ -114,7 +144,7 @@ pub(crate) struct Endpoint {
     /// The clock translation in use and the moment until which it holds, so that messages
     /// work out the estimate only a few times a second. Cleared when a reply changes the
     /// estimate.
-    pub(crate) clock_pass: Option<(Option<super::clock::Translation>, std::time::Instant)>,
+    pub(crate) clock_pass: Option<ClockPass>,
     /// This peer's incoming log (`vrpn_server -li`: one file per client).
     pub(crate) log_in: Option<LogSink>,
     /// Reassembles the TCP stream; made when the handshake completes.

@@ -435,3 +435,34 @@ fn translating_fresh_timestamps_skips_only_drift_that_rounds_to_nothing() {
     }
     assert_eq!(checked, 9 * 3 * 10);
 }
+
+/// A peer's clock pass translates a repeated timestamp (the sensors of one frame) from its
+/// last result, the same as translating it afresh; a new timestamp is translated anew, and
+/// without a translation times pass unchanged.
+#[test]
+fn a_clock_pass_reuses_the_last_translation_only_for_the_same_timestamp() {
+    use crate::proto::endpoint::ClockPass;
+    let t = Translation::new(-2_500_000, 1_700_000_000_000_000, 3e-5);
+    let mut pass = ClockPass {
+        translation: Some(t),
+        until: Instant::now(),
+        last: None,
+    };
+    let frame = TimeVal::new(1_700_000_000, 900_000);
+    let next = TimeVal::new(1_700_000_000, 900_001);
+    let old = TimeVal::new(1_699_999_000, 0); // old enough for the drift term to count
+    for remote in [frame, frame, next, frame, old, old, frame] {
+        assert_eq!(pass.to_local(remote), t.remote_to_local(remote), "{remote}");
+        assert_eq!(pass.last, Some((remote, t.remote_to_local(remote))));
+    }
+    assert_ne!(
+        t.remote_to_local(old).as_micros() - old.as_micros(),
+        2_500_000
+    );
+    let mut off = ClockPass {
+        translation: None,
+        until: Instant::now(),
+        last: None,
+    };
+    assert_eq!(off.to_local(frame), frame);
+}

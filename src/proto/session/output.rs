@@ -101,8 +101,8 @@ impl Session {
             }
             // A clock translation is reused until its limit: a deadline, so that no pass
             // reads the clock to check it.
-            if let Some((_, until)) = p.clock_pass {
-                at(until);
+            if let Some(pass) = &p.clock_pass {
+                at(pass.until);
             }
         }
         match &self.kind {
@@ -127,7 +127,7 @@ impl Session {
     pub fn handle_timeout(&mut self, now: Now) {
         self.timeouts_changed();
         for p in self.peers.iter_mut().flatten() {
-            if p.clock_pass.is_some_and(|(_, until)| now.mono >= until) {
+            if p.clock_pass.is_some_and(|pass| now.mono >= pass.until) {
                 p.clock_pass = None;
             }
         }

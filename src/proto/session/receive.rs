@@ -3,7 +3,7 @@
 
 use super::{Kind, Session, RESERVED_FOR_LOCAL};
 use crate::proto::client::Failure;
-use crate::proto::endpoint::{Phase, RemoteNames};
+use crate::proto::endpoint::{ClockPass, Phase, RemoteNames};
 use crate::proto::names::NameLimit;
 use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, Severity};
 use crate::time::TimeSource;
@@ -470,16 +470,21 @@ impl Session {
         // time comes first (used in place; the session clears it when a reply changes the
         // estimate or its reuse limit passes); only without one is the estimator asked, a
         // cheap test for a peer that never answered (a C++ one).
-        let time = match &p.clock_pass {
-            Some((Some(t), _)) => t.remote_to_local(h.time),
-            Some((None, _)) => h.time,
+        let time = match &mut p.clock_pass {
+            Some(pass) => pass.to_local(h.time),
             None => match p.clock.as_deref() {
                 Some(c) if c.has_estimate() => {
-                    let (t, until) = c.translation_until(now.now());
-                    p.clock_pass = Some((t, until));
+                    let (translation, until) = c.translation_until(now.now());
+                    let mut pass = ClockPass {
+                        translation,
+                        until,
+                        last: None,
+                    };
+                    let time = pass.to_local(h.time);
+                    p.clock_pass = Some(pass);
                     // Its limit is a deadline of the session.
                     self.timeout_cache.set(None);
-                    t.map_or(h.time, |t| t.remote_to_local(h.time))
+                    time
                 }
                 _ => h.time,
             },
