@@ -100,7 +100,7 @@ pub(crate) struct ClockPass {
 impl ClockPass {
     /// `remote` in local time.
     #[inline]
-    pub(crate) fn to_local(&mut self, remote: TimeVal) -> TimeVal {
+    pub(crate) fn translate(&mut self, remote: TimeVal) -> TimeVal {
         let Some(t) = &self.translation else {
             return remote;
         };

@@ -452,7 +452,11 @@ fn a_clock_pass_reuses_the_last_translation_only_for_the_same_timestamp() {
     let next = TimeVal::new(1_700_000_000, 900_001);
     let old = TimeVal::new(1_699_999_000, 0); // old enough for the drift term to count
     for remote in [frame, frame, next, frame, old, old, frame] {
-        assert_eq!(pass.to_local(remote), t.remote_to_local(remote), "{remote}");
+        assert_eq!(
+            pass.translate(remote),
+            t.remote_to_local(remote),
+            "{remote}"
+        );
         assert_eq!(pass.last, Some((remote, t.remote_to_local(remote))));
     }
     assert_ne!(
@@ -464,5 +468,5 @@ fn a_clock_pass_reuses_the_last_translation_only_for_the_same_timestamp() {
         until: Instant::now(),
         last: None,
     };
-    assert_eq!(off.to_local(frame), frame);
+    assert_eq!(off.translate(frame), frame);
 }

@@ -471,7 +471,7 @@ impl Session {
         // estimate or its reuse limit passes); only without one is the estimator asked, a
         // cheap test for a peer that never answered (a C++ one).
         let time = match &mut p.clock_pass {
-            Some(pass) => pass.to_local(h.time),
+            Some(pass) => pass.translate(h.time),
             None => match p.clock.as_deref() {
                 Some(c) if c.has_estimate() => {
                     let (translation, until) = c.translation_until(now.now());
@@ -480,7 +480,7 @@ impl Session {
                         until,
                         last: None,
                     };
-                    let time = pass.to_local(h.time);
+                    let time = pass.translate(h.time);
                     p.clock_pass = Some(pass);
                     // Its limit is a deadline of the session.
                     self.timeout_cache.set(None);
