@@ -27,7 +27,8 @@ use output::{errln, outln};
 const PROGRAM: &str = "vrpn_print_devices";
 
 const USAGE: &str =
-    "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] [-notracker] [-nobutton]
+    "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] [-rli FILE] [-rlo FILE]
+                          [-notracker] [-nobutton]
                           [-noanalog] [-nodial] [-notext] [-trackerstride N]
                           DEVICE@HOST[:PORT]...
        vrpn_print_devices --list HOST[:PORT]
@@ -40,6 +41,10 @@ const USAGE: &str =
   --log FILE         log every message received to FILE (C++ .vrpn format; one file per
                      server: FILE-2.vrpn, … for the second and later); replay it with
                      DEVICE@file:FILE
+  -rli FILE          ask each server to log what it receives from us to FILE, on its
+                     machine (C++ remote logging; a server of this crate writes it inside
+                     its -logdir folder, and only under a plain file name)
+  -rlo FILE          ask each server to log what it sends us to FILE, on its machine
   -notracker         do not print tracker reports of the devices that follow
   -nobutton          do not print button reports of the devices that follow
   -noanalog          do not print analog reports of the devices that follow
@@ -55,6 +60,8 @@ const USAGE: &str =
 
 /// The C++ options spelt with one dash.
 const CPP_OPTIONS: &[&str] = &[
+    "rli",
+    "rlo",
     "notracker",
     "nobutton",
     "noanalog",
@@ -102,6 +109,8 @@ struct PrintOptions {
     json: bool,
     seconds: Option<f64>,
     log: Option<String>,
+    remote_in: Option<String>,
+    remote_out: Option<String>,
     names: Vec<(String, Shown)>,
 }
 
@@ -122,6 +131,8 @@ fn parse_args() -> Result<Command, lexopt::Error> {
                 o.seconds = Some(s);
             }
             Long("log") => o.log = Some(parser.value()?.string()?),
+            Long("rli") => o.remote_in = Some(parser.value()?.string()?),
+            Long("rlo") => o.remote_out = Some(parser.value()?.string()?),
             Long("list") => list = Some(parser.value()?.string()?),
             Long("notracker") => shown.tracker = false,
             Long("nobutton") => shown.button = false,
@@ -336,6 +347,17 @@ fn print(o: &PrintOptions) -> u8 {
                 return 2;
             }
         };
+        if o.remote_in.is_some() || o.remote_out.is_some() {
+            let conn = tracker.connection();
+            let asked = conn.request_remote_logging(
+                o.remote_in.as_deref().unwrap_or(""),
+                o.remote_out.as_deref().unwrap_or(""),
+            );
+            if let Err(e) = asked {
+                errln!("{PROGRAM}: {name}: -rli/-rlo: {e}");
+                return 2;
+            }
+        }
         if let Some(path) = &o.log {
             let conn = tracker.connection();
             if !logged.iter().any(|c: &Connection| c.same_as(conn)) {

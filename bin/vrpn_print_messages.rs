@@ -99,13 +99,13 @@ impl NameCache {
 }
 
 fn json_line(time: vrpn::TimeVal, sender: &str, type_name: &str, len: usize) -> String {
-    serde_json::json!({
-        "time": time.as_secs_f64(),
-        "sender": sender,
-        "type": type_name,
-        "length": len,
-    })
-    .to_string()
+    let text = |s: &str| serde_json::to_string(s).expect("a string serialises");
+    format!(
+        "{{\"time\":{},\"sender\":{},\"type\":{},\"length\":{len}}}",
+        serde_json::Number::from_f64(time.as_secs_f64()).map_or("null".into(), |n| n.to_string()),
+        text(sender),
+        text(type_name)
+    )
 }
 
 fn run(o: &Options) -> u8 {

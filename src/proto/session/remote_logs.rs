@@ -133,10 +133,15 @@ impl Session {
         let (log_in, log_out) = match opened {
             Ok(logs) => logs,
             Err(refusal) => {
-                self.refusal = Some(format!(
-                    "{label} asked to be logged, which this server cannot do: {refusal}; \
-                     connection closed (how a VRPN client learns that remote logging failed)"
-                ));
+                self.notice(
+                    Severity::Warning,
+                    format!(
+                        "{label} asked to be logged, which this server cannot do: {refusal}; \
+                         connection closed (how a VRPN client learns that remote logging \
+                         failed)"
+                    ),
+                );
+                self.refusal = Some(format!("{label}: remote logging refused"));
                 return;
             }
         };
