@@ -168,6 +168,7 @@ pub mod button;
 pub mod clock;
 pub mod dial;
 pub mod force;
+pub mod forwarder;
 pub mod poser;
 pub mod text;
 pub mod tracker;
