@@ -133,3 +133,7 @@ struct ReadmeDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/USING.md")]
 struct UsingDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/LOGGING_REQUESTS.md")]
+struct LoggingRequestsDoctests;
