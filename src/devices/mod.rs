@@ -11,6 +11,7 @@ pub mod base;
 pub mod builder;
 pub mod button;
 pub mod dial;
+pub mod examples;
 pub mod force;
 pub mod latest;
 pub mod poser;
