@@ -388,9 +388,16 @@ pub fn assert_run_of<T: PartialEq + Debug>(
     runs
 }
 
-/// Asserts that each report time in `stamps` is the arrival of its record's first byte:
-/// no earlier than the moment the simulator wrote that byte (`sent_at`, on the monotonic
-/// clock of `t0`) less 1 ms of clock granularity, and no later than `max_lag` after it.
+/// Asserts that the report times in `stamps` are the arrivals of their records' first bytes,
+/// against the moments the simulator wrote those bytes (`sent_at`, on the monotonic clock of
+/// `t0`): the median lag lies between −2 ms and `max_lag` / 5, and every lag between −50 ms and
+/// `max_lag`.
+///
+/// A stamp may come a little *before* its byte left: a read takes everything that arrived
+/// since the poll woke, and stamps it with the wake time, so on a loaded machine a record
+/// whose first byte arrived between the wake and the read gets the earlier time. A stamp
+/// taken at the end of a record, or when it was decoded, shows as a lag of a record's
+/// transmission time or more.
 pub fn assert_first_byte_stamps(
     stamps: &[TimeVal],
     sent_at: &[Instant],
@@ -398,13 +405,29 @@ pub fn assert_first_byte_stamps(
     max_lag: Duration,
     what: &str,
 ) {
-    assert_eq!(stamps.len(), sent_at.len().min(stamps.len()), "{what}");
-    for (i, (stamp, &at)) in stamps.iter().zip(sent_at).enumerate() {
-        let left = t0.wall.plus(at.saturating_duration_since(t0.mono));
-        let lag = stamp.seconds_since(left);
+    assert!(
+        sent_at.len() >= stamps.len(),
+        "{what}: more stamps than records"
+    );
+    let mut lags: Vec<f64> = stamps
+        .iter()
+        .zip(sent_at)
+        .map(|(stamp, &at)| {
+            let left = t0.wall.plus(at.saturating_duration_since(t0.mono));
+            stamp.seconds_since(left)
+        })
+        .collect();
+    for (i, lag) in lags.iter().enumerate() {
         assert!(
-            (-0.001..max_lag.as_secs_f64()).contains(&lag),
+            (-0.05..max_lag.as_secs_f64()).contains(lag),
             "{what}: report {i} stamped {lag:.6} s after its first byte left the simulator"
+        );
+    }
+    lags.sort_by(f64::total_cmp);
+    if let Some(&median) = lags.get(lags.len() / 2) {
+        assert!(
+            (-0.002..max_lag.as_secs_f64() / 5.0).contains(&median),
+            "{what}: the median report is stamped {median:.6} s after its first byte left"
         );
     }
 }
