@@ -12,6 +12,7 @@ pub mod builder;
 pub mod button;
 pub mod dial;
 pub mod force;
+pub mod imager;
 pub mod latest;
 pub mod poser;
 pub mod text;
@@ -30,6 +31,8 @@ builder::remote_builder!(
     poser::PoserRemote,
     force::ForceDeviceRemote,
     text_device::TextReceiver,
+    imager::ImagerRemote,
+    imager::ImagerPoseRemote,
 );
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest
