@@ -7,6 +7,7 @@ use crate::time::Now;
 
 pub mod analog;
 pub mod analog_output;
+pub mod aux_logger;
 pub mod base;
 pub mod builder;
 pub mod button;
@@ -36,6 +37,7 @@ builder::remote_builder!(
     text_device::TextReceiver,
     imager::ImagerRemote,
     imager::ImagerPoseRemote,
+    aux_logger::AuxLoggerRemote,
 );
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest
