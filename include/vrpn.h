@@ -240,11 +240,11 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Position in metres.
+     * Position in metres, tracker frame.
      */
     double pos[3];
     /**
-     * Orientation quaternion (x, y, z, w).
+     * Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's.
      */
     double quat[4];
 } VrpnTrackerPose;
@@ -267,11 +267,12 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Linear velocity, metres per second.
+     * Linear velocity, metres per second, tracker frame.
      */
     double vel[3];
     /**
-     * Rotation over `vel_quat_dt` seconds (x, y, z, w).
+     * Rotation over `vel_quat_dt` seconds (x, y, z, w), expressed in the tracker's frame:
+     * the orientation `vel_quat_dt` later is `vel_quat * quat`.
      */
     double vel_quat[4];
     /**
@@ -298,7 +299,7 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Linear acceleration, metres per second squared.
+     * Linear acceleration, metres per second squared, tracker frame.
      */
     double acc[3];
     /**
@@ -829,8 +830,9 @@ VrpnStatus vrpn_tracker_server_free(VrpnTrackerServer *tracker);
 VrpnStatus vrpn_tracker_server_report_pose(VrpnTrackerServer *tracker, int32_t sensor, const VrpnTimeVal *time, const double *pos, const double *quat);
 
 /**
- * Reports a velocity of `sensor`: `vel` 3 doubles (m/s), `vel_quat` 4 (the rotation over
- * `dt` seconds, x, y, z, w); `time` NULL for now.
+ * Reports a velocity of `sensor`: `vel` 3 doubles (m/s, tracker frame), `vel_quat` 4 (the
+ * rotation over `dt` seconds in the tracker's frame, x, y, z, w: the orientation `dt` later
+ * is `vel_quat * quat`); `time` NULL for now.
  */
 VrpnStatus vrpn_tracker_server_report_velocity(VrpnTrackerServer *tracker, int32_t sensor, const VrpnTimeVal *time, const double *vel, const double *vel_quat, double dt);
 
