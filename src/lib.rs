@@ -134,3 +134,23 @@ struct UsingDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/IMAGER.md")]
 struct ImagerDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/MUTEX.md")]
+struct MutexDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SHARED_OBJECTS.md")]
+struct SharedObjectDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/FUNCTION_GENERATOR.md")]
+struct FunctionGeneratorDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SOUND.md")]
+struct SoundDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/REDUNDANT_TRANSMISSION.md")]
+struct RedundantDoctests;
