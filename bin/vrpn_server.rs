@@ -9,6 +9,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use vrpn::devices::base::set_print_threshold;
+use vrpn::driver::DeviceStatus;
 use vrpn::server::config::{self, DeviceEntry};
 use vrpn::server::options::USAGE;
 use vrpn::server::{build_devices, parse_args, BuildNote, ServerCommand, ServerLoop};
@@ -85,13 +86,23 @@ fn main() -> ExitCode {
         }
     }
     let verbose = opts.verbose;
-    let devices = build_devices(&entries, &conn, opts.warn_only, |note| match note {
-        BuildNote::Opened { entry, name } if verbose => {
-            outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
-        }
-        BuildNote::Opened { .. } => {}
-        BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+    // A device's port problems (cannot open it, lost it) and recoveries, once per change.
+    let status: vrpn::driver::StatusSink = std::rc::Rc::new(|name: &str, status: &DeviceStatus| {
+        errln!("{PROGRAM}: {name}: {status}");
     });
+    let devices = build_devices(
+        &entries,
+        &conn,
+        opts.warn_only,
+        Some(status),
+        |note| match note {
+            BuildNote::Opened { entry, name } if verbose => {
+                outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
+            }
+            BuildNote::Opened { .. } => {}
+            BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+        },
+    );
     let devices = match devices {
         Ok(d) => d,
         Err(e) => {
