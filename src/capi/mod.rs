@@ -35,6 +35,7 @@ mod handle;
 pub mod remotes;
 pub mod server;
 pub mod types;
+pub mod waiting;
 
 use std::cell::RefCell;
 use std::ffi::{c_char, CStr, CString};

@@ -14,6 +14,7 @@ mod remote;
 mod remotes;
 mod server;
 mod values;
+mod waiting;
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
