@@ -13,7 +13,6 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, Palette, Palette99};
-use vrpn::log::LogReader;
 
 pub use plot_data::{read, PlotData};
 
@@ -34,6 +33,20 @@ const MAX_POINTS: usize = 4000;
 const MAX_INTERVAL_POINTS: usize = 20_000;
 
 type Res = Result<(), Box<dyn Error>>;
+
+/// An axis number without float noise: `-0` as `0`, at most four decimals, no trailing
+/// zeros.
+fn num(v: &f64) -> String {
+    let v = if v.abs() < 1e-9 { 0.0 } else { *v };
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    s.to_string()
+}
+
+/// A count on an axis.
+fn whole(v: &f64) -> String {
+    format!("{v:.0}")
+}
 
 /// Output format, from the file name.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -107,21 +120,15 @@ pub fn render(d: &PlotData, out: &str, format: Format) -> Res {
             let mut png = png::Encoder::new(file, size.0, size.1);
             png.set_color(png::ColorType::Rgb);
             png.set_depth(png::BitDepth::Eight);
+            // Flat colours and lines: the adaptive filter with the best compression makes
+            // the file several times smaller than the defaults do.
+            png.set_compression(png::Compression::Best);
+            png.set_filter(png::FilterType::Paeth);
+            png.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
             png.write_header()?.write_image_data(&rgb)?;
         }
     }
     Ok(())
-}
-
-/// Reads `device` from `reader` and renders it; for the tests.
-#[allow(dead_code)]
-pub fn plot(reader: &LogReader, device: &str, out: &str) -> Res {
-    let r = read(reader, device);
-    render(
-        &r.data,
-        out,
-        Format::of(out).ok_or("OUT must end in .png or .svg")?,
-    )
 }
 
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &PlotData) -> Res
@@ -133,7 +140,7 @@ where
     let reports: usize = d.intervals.values().map(|v| v.len() + 1).sum();
     title.draw(&Text::new(
         format!(
-            "{}: {reports} reports over {:.3} s (from {:.3} s since 1970)",
+            "{}: {reports} reports over {:.3} s (time 0 = {:.6} s since 1970)",
             d.device, d.end, d.start
         ),
         (12, 12),
@@ -215,6 +222,8 @@ where
         let mut mesh = chart.configure_mesh();
         mesh.y_desc(format!("{name} (m)"))
             .label_style((FAMILY, 12))
+            .y_label_formatter(&num)
+            .x_label_formatter(&num)
             .y_labels(5)
             .light_line_style(WHITE.mix(0.0));
         if axis == 2 {
@@ -257,6 +266,8 @@ where
         .x_desc("x (m)")
         .y_desc("y (m)")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
+        .y_label_formatter(&num)
         .x_labels(5)
         .y_labels(5)
         .draw()?;
@@ -293,6 +304,8 @@ where
         .x_desc("time (s)")
         .y_desc("value")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
+        .y_label_formatter(&num)
         .draw()?;
     let reports = thin(&d.analog.iter().enumerate().collect::<Vec<_>>(), MAX_POINTS);
     for ch in 0..n.min(32) {
@@ -333,6 +346,7 @@ where
         .configure_mesh()
         .x_desc("time (s)")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
         .y_labels(shown.len() * 2 + 1)
         .y_label_formatter(&|y| {
             let i = (y - 0.5).round();
@@ -394,6 +408,8 @@ where
         .x_desc("time (s)")
         .y_desc("revolutions")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
+        .y_label_formatter(&num)
         .draw()?;
     for (i, (dial, v)) in d.dials.iter().enumerate() {
         let c = colour(i);
@@ -460,6 +476,8 @@ where
         .x_desc("time (s)")
         .y_desc("interval (ms)")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
+        .y_label_formatter(&num)
         .draw()?;
     for (i, (stream, v)) in d.intervals.iter().enumerate() {
         let c = colour(i);
@@ -519,6 +537,8 @@ where
         .x_desc("interval (ms)")
         .y_desc("reports")
         .label_style((FAMILY, 12))
+        .x_label_formatter(&num)
+        .y_label_formatter(&whole)
         .x_labels(5)
         .draw()?;
     hist.draw_series(

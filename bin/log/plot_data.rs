@@ -81,15 +81,21 @@ pub fn read(reader: &LogReader, device: &str) -> Read {
             Decoded::Dial { .. } => "dials".to_string(),
             _ => continue,
         };
-        let t0 = *start.get_or_insert(abs);
-        let t = abs - t0;
+        // Some C++ devices stamp their first reports with time zero (a Joylin's button
+        // states): they are drawn at the start and have no interval.
+        let t = if abs == 0.0 {
+            0.0
+        } else {
+            let t = abs - *start.get_or_insert(abs);
+            if let Some(prev) = last.insert(stream.clone(), t) {
+                d.intervals
+                    .entry(stream)
+                    .or_default()
+                    .push((t, (t - prev) * 1000.0));
+            }
+            t
+        };
         d.end = d.end.max(t);
-        if let Some(prev) = last.insert(stream.clone(), t) {
-            d.intervals
-                .entry(stream)
-                .or_default()
-                .push((t, (t - prev) * 1000.0));
-        }
         match &rec.decoded {
             Decoded::Pose { sensor, pos, .. } => {
                 d.poses.entry(*sensor).or_default().push((t, *pos))
@@ -123,5 +129,65 @@ fn change(d: &mut PlotData, t: f64, button: i32, pressed: bool) {
     let v = d.buttons.entry(button).or_default();
     if v.last().map_or(true, |p| p.1 != pressed) {
         v.push((t, pressed));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn golden(name: &str) -> LogReader {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/golden");
+        LogReader::open(dir.join(name)).unwrap()
+    }
+
+    /// C++ vrpn_server's 30 Hz spinning tracker: every pose, its intervals about 33 ms.
+    #[test]
+    fn a_tracker_log_gives_every_pose_and_its_intervals() {
+        let r = read(&golden("tracker_spin.out.vrpn"), "Tracker0");
+        assert!(r.found && r.damage.is_none());
+        let poses = &r.data.poses[&0];
+        assert_eq!(poses.len(), 90, "the summary counts 90 Pos_Quat");
+        assert_eq!(poses[0].0, 0.0);
+        assert!(poses.windows(2).all(|w| w[0].0 <= w[1].0));
+        let iv = &r.data.intervals["sensor 0"];
+        assert_eq!(iv.len(), 89);
+        let mut ms: Vec<f64> = iv.iter().map(|p| p.1).collect();
+        ms.sort_by(f64::total_cmp);
+        assert!(
+            (ms[ms.len() / 2] - 33.3).abs() < 3.0,
+            "median {}",
+            ms[ms.len() / 2]
+        );
+        assert!((r.data.end - poses.last().unwrap().0).abs() < 1e-9);
+    }
+
+    /// Buttons as changes, analogs per report, dials summed; reports stamped zero (a C++
+    /// Joylin's first button states) sit at the start.
+    #[test]
+    fn buttons_analogs_and_dials() {
+        let log = golden("button_analog_dial.out.vrpn");
+        let b = read(&log, "Button0").data;
+        assert!(!b.buttons.is_empty());
+        for changes in b.buttons.values() {
+            assert!(
+                changes.windows(2).all(|w| w[0].1 != w[1].1),
+                "repeated state"
+            );
+        }
+        let a = read(&log, "Analog0").data;
+        assert_eq!(a.analog.len(), 79);
+        assert!(
+            a.end < 10.0,
+            "zero timestamps stretched the time axis: {}",
+            a.end
+        );
+        assert!(!a.buttons.is_empty());
+        let d = read(&log, "Dial0").data;
+        let updates: usize = d.dials.values().map(Vec::len).sum();
+        assert_eq!(updates, 82);
+        let missing = read(&log, "Nothing");
+        assert!(!missing.found);
+        assert_eq!(missing.devices, ["Button0", "Dial0", "Analog0"]);
     }
 }
