@@ -277,7 +277,7 @@ impl Browser {
             "--disable-component-update",
             "--disable-sync",
             "--remote-debugging-pipe",
-            "--window-size=1280,1000",
+            "--window-size=1280,1400",
             "--hide-scrollbars",
         ])
         .arg(format!("--user-data-dir={}", profile.display()))
