@@ -51,13 +51,18 @@ pub enum Error {
     NotConnected(ConnectionState),
     /// The operation needs a different kind of connection (e.g. a server socket on a client).
     Unsupported(&'static str),
+    /// An argument is out of range for the device (an image region outside the image, a
+    /// channel that does not exist, a name too long for its field): the text says which.
+    InvalidArgument(String),
 }
 
 impl Error {
     /// A log error as the variant a user matches: not found, damaged, or other.
     pub(crate) fn from_log(e: LogError) -> Error {
         match e {
-            LogError::Io { path, error, .. } if error.kind() == io::ErrorKind::NotFound => {
+            LogError::Open { path, error } | LogError::Io { path, error, .. }
+                if error.kind() == io::ErrorKind::NotFound =>
+            {
                 Error::LogNotFound { path }
             }
             e @ (LogError::BadCookie { .. } | LogError::BadEntry { .. }) => Error::LogDamaged(e),
@@ -91,7 +96,7 @@ impl std::fmt::Display for Error {
             ),
             Error::Log(text) => f.write_str(text),
             Error::LogNotFound { path } => {
-                write!(f, "{}: no such log file", path.display())
+                write!(f, "cannot read log file {}: no such file", path.display())
             }
             Error::LogDamaged(e) => e.fmt(f),
             Error::NotConnected(state) => write!(
@@ -99,6 +104,7 @@ impl std::fmt::Display for Error {
                 "not sent: the connection is not up yet ({state:?}); send once it is Connected"
             ),
             Error::Unsupported(what) => write!(f, "not supported: {what}"),
+            Error::InvalidArgument(what) => write!(f, "invalid argument: {what}"),
         }
     }
 }

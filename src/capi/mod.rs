@@ -31,9 +31,11 @@
 #![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 pub mod client;
+pub mod connection;
 mod handle;
 pub mod remotes;
 pub mod server;
+pub mod text;
 pub mod types;
 pub mod waiting;
 
@@ -139,6 +141,7 @@ impl From<Error> for Failure {
             Error::Log(_) | Error::LogNotFound { .. } | Error::LogDamaged(_) => VrpnStatus::Log,
             Error::NotConnected(_) => VrpnStatus::NotConnected,
             Error::Unsupported(_) => VrpnStatus::Unsupported,
+            Error::InvalidArgument(_) => VrpnStatus::InvalidArgument,
         };
         Failure::new(status, e.to_string())
     }

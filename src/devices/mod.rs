@@ -12,9 +12,14 @@ pub mod base;
 pub mod builder;
 pub mod button;
 pub mod dial;
+pub mod examples;
 pub mod force;
+pub mod imager;
 pub mod latest;
+pub mod mutex;
+pub mod peer_mutex;
 pub mod poser;
+pub mod shared_object;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
@@ -31,6 +36,8 @@ builder::remote_builder!(
     poser::PoserRemote,
     force::ForceDeviceRemote,
     text_device::TextReceiver,
+    imager::ImagerRemote,
+    imager::ImagerPoseRemote,
     aux_logger::AuxLoggerRemote,
 );
 
