@@ -120,7 +120,7 @@ pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
 pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
-pub use net::Reactor;
+pub use net::{Reactor, Waiter, Wake};
 pub use time::{Now, TimeVal};
 
 /// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
