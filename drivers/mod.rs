@@ -30,6 +30,9 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    // Logging and relaying other servers' devices.
+    &crate::devices::aux_logger::config::AUX_LOGGER,
+    &crate::forward::relay::config::RELAY,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,

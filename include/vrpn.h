@@ -28,6 +28,11 @@
 #define VRPN_NAME_CAPACITY 96
 
 /**
+ * Capacity of `VrpnAnalogOutputValues::channels` (C++ `vrpn_CHANNEL_MAX`).
+ */
+#define VRPN_ANALOG_OUTPUT_CAPACITY 128
+
+/**
  * Capacity of `VrpnTextMessage::text`: the longest VRPN text (1023 bytes) and its NUL.
  */
 #define VRPN_TEXT_CAPACITY 1024
@@ -164,6 +169,16 @@ typedef int32_t VrpnConnectionState;
 typedef struct VrpnAnalog VrpnAnalog;
 
 /**
+ * An analog output remote (C++ `vrpn_Analog_Output_Remote`).
+ */
+typedef struct VrpnAnalogOutput VrpnAnalogOutput;
+
+/**
+ * An analog output device on a server (C++ `vrpn_Analog_Output_Callback_Server`).
+ */
+typedef struct VrpnAnalogOutputServer VrpnAnalogOutputServer;
+
+/**
  * An analog server (C++ `vrpn_Analog_Server`).
  */
 typedef struct VrpnAnalogServer VrpnAnalogServer;
@@ -194,6 +209,26 @@ typedef struct VrpnDial VrpnDial;
 typedef struct VrpnDialServer VrpnDialServer;
 
 /**
+ * A force device remote (C++ `vrpn_ForceDevice_Remote`).
+ */
+typedef struct VrpnForceDevice VrpnForceDevice;
+
+/**
+ * A force device on a server (C++ `vrpn_ForceDevice_Server`).
+ */
+typedef struct VrpnForceDeviceServer VrpnForceDeviceServer;
+
+/**
+ * A poser remote (C++ `vrpn_Poser_Remote`).
+ */
+typedef struct VrpnPoser VrpnPoser;
+
+/**
+ * A poser on a server (C++ `vrpn_Poser_Server`).
+ */
+typedef struct VrpnPoserServer VrpnPoserServer;
+
+/**
  * A server connection (C++ `vrpn_Connection` made by `vrpn_create_server_connection`).
  */
 typedef struct VrpnServer VrpnServer;
@@ -202,6 +237,11 @@ typedef struct VrpnServer VrpnServer;
  * A text receiver (C++ `vrpn_Text_Receiver`).
  */
 typedef struct VrpnText VrpnText;
+
+/**
+ * A text sender on a server (C++ `vrpn_Text_Sender`): texts as a device.
+ */
+typedef struct VrpnTextSender VrpnTextSender;
 
 /**
  * A tracker remote (C++ `vrpn_Tracker_Remote`).
@@ -322,6 +362,148 @@ typedef void (*VrpnTrackerAccelerationCallback)(void *userdata, const VrpnTracke
  * call only.
  */
 typedef void (*VrpnPeerSenderCallback)(void *userdata, const char *name);
+
+/**
+ * A force the device reports.
+ */
+typedef struct {
+    /**
+     * Time the server stamped on it.
+     */
+    VrpnTimeVal time;
+    /**
+     * Force x, y, z.
+     */
+    double force[3];
+} VrpnForceReport;
+
+/**
+ * Receives force reports; `report` is valid during the call only.
+ */
+typedef void (*VrpnForceCallback)(void *userdata, const VrpnForceReport *report);
+
+/**
+ * A surface contact point the device reports.
+ */
+typedef struct {
+    /**
+     * Time the server stamped on it.
+     */
+    VrpnTimeVal time;
+    /**
+     * Contact point.
+     */
+    double pos[3];
+    /**
+     * Orientation (x, y, z, w).
+     */
+    double quat[4];
+} VrpnScpReport;
+
+/**
+ * Receives contact points.
+ */
+typedef void (*VrpnScpCallback)(void *userdata, const VrpnScpReport *report);
+
+/**
+ * An error the device reports.
+ */
+typedef struct {
+    /**
+     * Time the server stamped on it.
+     */
+    VrpnTimeVal time;
+    /**
+     * Error code (C++ `FD_*`).
+     */
+    int32_t code;
+} VrpnForceErrorReport;
+
+/**
+ * Receives errors.
+ */
+typedef void (*VrpnForceErrorCallback)(void *userdata, const VrpnForceErrorReport *report);
+
+/**
+ * The output values after a client's request.
+ */
+typedef struct {
+    /**
+     * Time the client stamped on the request.
+     */
+    VrpnTimeVal time;
+    /**
+     * Channels in use: `channels[0..num_channels]`.
+     */
+    int32_t num_channels;
+    /**
+     * The values.
+     */
+    double channels[VRPN_ANALOG_OUTPUT_CAPACITY];
+} VrpnAnalogOutputValues;
+
+/**
+ * Receives the values after each client request.
+ */
+typedef void (*VrpnAnalogOutputCallback)(void *userdata, const VrpnAnalogOutputValues *values);
+
+/**
+ * A pose a client asked a poser for.
+ */
+typedef struct {
+    /**
+     * Time the client stamped on the request.
+     */
+    VrpnTimeVal time;
+    /**
+     * Position.
+     */
+    double pos[3];
+    /**
+     * Orientation (x, y, z, w).
+     */
+    double quat[4];
+    /**
+     * 1 for a relative request (the step as sent), 0 for an absolute one.
+     */
+    int32_t relative;
+} VrpnPoserRequest;
+
+/**
+ * Receives pose requests.
+ */
+typedef void (*VrpnPoserCallback)(void *userdata, const VrpnPoserRequest *request);
+
+/**
+ * A force field a client sent.
+ */
+typedef struct {
+    /**
+     * Time the client stamped on it.
+     */
+    VrpnTimeVal time;
+    /**
+     * Field origin.
+     */
+    float origin[3];
+    /**
+     * Force at the origin.
+     */
+    float force[3];
+    /**
+     * Jacobian, row-major.
+     */
+    float jacobian[9];
+    /**
+     * Radius beyond which the field is off.
+     */
+    float radius;
+} VrpnForceFieldRequest;
+
+/**
+ * Receives force fields.
+ */
+typedef void (*VrpnForceFieldCallback)(void *userdata, const VrpnForceFieldRequest *field);
 
 /**
  * One button changed.
@@ -642,6 +824,244 @@ VrpnStatus vrpn_connection_replay_length(const VrpnConnection *connection, doubl
  * `VRPN_STATUS_NO_DATA` (nothing written) for a log without messages.
  */
 VrpnStatus vrpn_connection_replay_start_time(const VrpnConnection *connection, VrpnTimeVal *time);
+
+/**
+ * Opens the analog output device `name` ("Out0@host", see `vrpn_tracker_open`); NULL on
+ * failure.
+ */
+VrpnAnalogOutput *vrpn_analog_output_open(const char *name);
+
+/**
+ * Frees an analog output remote (NULL is ignored).
+ */
+VrpnStatus vrpn_analog_output_free(VrpnAnalogOutput *ao);
+
+/**
+ * Services the remote's connection without blocking.
+ */
+VrpnStatus vrpn_analog_output_mainloop(VrpnAnalogOutput *ao);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_analog_output_connection_state(const VrpnAnalogOutput *ao);
+
+/**
+ * Asks the server to set `channel` to `value`. `VRPN_STATUS_NOT_CONNECTED` before the
+ * connection is up (nothing is queued).
+ */
+VrpnStatus vrpn_analog_output_request_channel(VrpnAnalogOutput *ao, int32_t channel, double value);
+
+/**
+ * Asks the server to set channels 0 to `n - 1` to `values[0..n]`.
+ */
+VrpnStatus vrpn_analog_output_request_channels(VrpnAnalogOutput *ao, const double *values, int32_t n);
+
+/**
+ * The server's channel count as it last announced it (128 until it does), or a negative
+ * status.
+ */
+int32_t vrpn_analog_output_num_channels(const VrpnAnalogOutput *ao);
+
+/**
+ * Opens the poser `name`; NULL on failure.
+ */
+VrpnPoser *vrpn_poser_open(const char *name);
+
+/**
+ * Frees a poser remote (NULL is ignored).
+ */
+VrpnStatus vrpn_poser_free(VrpnPoser *poser);
+
+/**
+ * Services the remote's connection without blocking.
+ */
+VrpnStatus vrpn_poser_mainloop(VrpnPoser *poser);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_poser_connection_state(const VrpnPoser *poser);
+
+/**
+ * Asks for a pose: `pos` 3 doubles, `quat` 4 (x, y, z, w); `time` NULL for now. With
+ * `relative` non-zero the step is added to the pose last asked for (positions add,
+ * rotations compose) and the sum is sent as a relative request, as C++ does.
+ */
+VrpnStatus vrpn_poser_request_pose(VrpnPoser *poser, const VrpnTimeVal *time, const double *pos, const double *quat, int32_t relative);
+
+/**
+ * Asks for a velocity: `vel` 3 doubles, and the rotation `quat` (4 doubles, x, y, z, w)
+ * done in `dt` seconds; `time` NULL for now.
+ */
+VrpnStatus vrpn_poser_request_velocity(VrpnPoser *poser, const VrpnTimeVal *time, const double *vel, const double *quat, double dt);
+
+/**
+ * Opens the force device `name`; NULL on failure.
+ */
+VrpnForceDevice *vrpn_force_device_open(const char *name);
+
+/**
+ * Frees a force device remote (NULL is ignored).
+ */
+VrpnStatus vrpn_force_device_free(VrpnForceDevice *fd);
+
+/**
+ * Services the remote's connection without blocking; runs callbacks.
+ */
+VrpnStatus vrpn_force_device_mainloop(VrpnForceDevice *fd);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_force_device_connection_state(const VrpnForceDevice *fd);
+
+/**
+ * Calls `callback(userdata, report)` for every force the device reports.
+ */
+VrpnStatus vrpn_force_device_on_force(VrpnForceDevice *fd, VrpnForceCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Calls `callback(userdata, report)` for every surface contact point.
+ */
+VrpnStatus vrpn_force_device_on_scp(VrpnForceDevice *fd, VrpnScpCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Calls `callback(userdata, report)` for every error the device reports.
+ */
+VrpnStatus vrpn_force_device_on_error(VrpnForceDevice *fd, VrpnForceErrorCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by its id.
+ */
+VrpnStatus vrpn_force_device_remove_callback(VrpnForceDevice *fd, uint64_t id);
+
+/**
+ * Sends a force field: force = `force` + `jacobian` · (position − `origin`) within `radius`
+ * of the origin; `origin` and `force` point to 3 floats, `jacobian` to 9 (row-major).
+ */
+VrpnStatus vrpn_force_device_send_force_field(VrpnForceDevice *fd, const float *origin, const float *force, const float *jacobian, float radius);
+
+/**
+ * Stops the force field.
+ */
+VrpnStatus vrpn_force_device_stop_force_field(VrpnForceDevice *fd);
+
+/**
+ * Sends custom effect `effect_id` with `n` parameters (`params` NULL when `n` is 0).
+ */
+VrpnStatus vrpn_force_device_send_custom_effect(VrpnForceDevice *fd, uint32_t effect_id, const float *params, int32_t n);
+
+/**
+ * Stops the custom effect.
+ */
+VrpnStatus vrpn_force_device_stop_effect(VrpnForceDevice *fd);
+
+/**
+ * Serves analog output device `name` with `channels` channels (1..=128) on `server`; NULL
+ * on failure (as `vrpn_tracker_server_new`).
+ */
+VrpnAnalogOutputServer *vrpn_analog_output_server_new(VrpnServer *server, const char *name, int32_t channels);
+
+/**
+ * Frees an analog output server (NULL is ignored).
+ */
+VrpnStatus vrpn_analog_output_server_free(VrpnAnalogOutputServer *aos);
+
+/**
+ * Calls `callback(userdata, values)` after each client request (inside
+ * `vrpn_server_mainloop`).
+ */
+VrpnStatus vrpn_analog_output_server_on_request(VrpnAnalogOutputServer *aos, VrpnAnalogOutputCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by its id.
+ */
+VrpnStatus vrpn_analog_output_server_remove_callback(VrpnAnalogOutputServer *aos, uint64_t id);
+
+/**
+ * Copies the current values into `out` (room for `capacity` doubles); returns the number
+ * of channels (which may exceed `capacity`: only `capacity` are copied), or a negative
+ * status.
+ */
+int32_t vrpn_analog_output_server_values(const VrpnAnalogOutputServer *aos, double *out, int32_t capacity);
+
+/**
+ * Announces the channel count to every client.
+ */
+VrpnStatus vrpn_analog_output_server_report_num_channels(VrpnAnalogOutputServer *aos);
+
+/**
+ * Serves poser `name` on `server`; NULL on failure.
+ */
+VrpnPoserServer *vrpn_poser_server_new(VrpnServer *server, const char *name);
+
+/**
+ * Frees a poser server (NULL is ignored).
+ */
+VrpnStatus vrpn_poser_server_free(VrpnPoserServer *ps);
+
+/**
+ * Calls `callback(userdata, request)` for every pose request, absolute and relative.
+ */
+VrpnStatus vrpn_poser_server_on_request(VrpnPoserServer *ps, VrpnPoserCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by the id `vrpn_poser_server_on_request` gave.
+ */
+VrpnStatus vrpn_poser_server_remove_callback(VrpnPoserServer *ps, uint64_t id);
+
+/**
+ * Serves force device `name` on `server`; NULL on failure.
+ */
+VrpnForceDeviceServer *vrpn_force_device_server_new(VrpnServer *server, const char *name);
+
+/**
+ * Frees a force device server (NULL is ignored).
+ */
+VrpnStatus vrpn_force_device_server_free(VrpnForceDeviceServer *fds);
+
+/**
+ * Reports a force (`force` 3 doubles); `time` NULL for now.
+ */
+VrpnStatus vrpn_force_device_server_report_force(VrpnForceDeviceServer *fds, const VrpnTimeVal *time, const double *force);
+
+/**
+ * Reports a surface contact point (`pos` 3 doubles, `quat` 4: x, y, z, w).
+ */
+VrpnStatus vrpn_force_device_server_report_scp(VrpnForceDeviceServer *fds, const VrpnTimeVal *time, const double *pos, const double *quat);
+
+/**
+ * Reports an error code (C++ `FD_*`).
+ */
+VrpnStatus vrpn_force_device_server_send_error(VrpnForceDeviceServer *fds, int32_t code);
+
+/**
+ * Calls `callback(userdata, field)` for every force field a client sends (an all-zero field
+ * stops forces).
+ */
+VrpnStatus vrpn_force_device_server_on_force_field(VrpnForceDeviceServer *fds, VrpnForceFieldCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by its id.
+ */
+VrpnStatus vrpn_force_device_server_remove_callback(VrpnForceDeviceServer *fds, uint64_t id);
+
+/**
+ * Sends text messages as device `name` on `server`; NULL on failure.
+ */
+VrpnTextSender *vrpn_text_sender_new(VrpnServer *server, const char *name);
+
+/**
+ * Frees a text sender (NULL is ignored).
+ */
+VrpnStatus vrpn_text_sender_free(VrpnTextSender *ts);
+
+/**
+ * Sends `text` (UTF-8, at most 1023 bytes) with `severity` 0 normal, 1 warning, 2 error and
+ * a free-form `level`; `time` NULL for now.
+ */
+VrpnStatus vrpn_text_sender_send(VrpnTextSender *ts, const char *text, uint32_t severity, uint32_t level, const VrpnTimeVal *time);
 
 /**
  * Opens the button device `name` (see `vrpn_tracker_open`); NULL on failure.

@@ -227,6 +227,19 @@ fn c_api_checks() {
     assert!(out.contains("checks passed"), "{out}");
 }
 
+/// Analog_Output, Poser, ForceDevice and the text sender, both sides, through the C ABI.
+#[test]
+fn c_output_devices_both_sides() {
+    let scratch = Scratch::new("output");
+    let exe = scratch.0.join("output_devices");
+    compile("tests/c/output_devices.c", &exe, Link::Shared);
+    let out = run(&exe, &[]);
+    assert!(
+        out.contains("output_devices:") && out.contains("checks passed"),
+        "{out}"
+    );
+}
+
 /// `vrpn_tracker_wait` and a `poll()` on `vrpn_tracker_fd` read a 60 Hz two-sensor tracker
 /// with about one wake-up per datagram (both sensors' poses), not one per millisecond.
 #[test]

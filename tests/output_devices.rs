@@ -67,7 +67,7 @@ fn analog_output_announces_channels_on_connection() {
 fn poser_requests_and_quirks() {
     let conn = Connection::new_loopback();
     let server = PoserServer::new("Poser0", &conn).unwrap();
-    let mut remote = PoserRemote::on_connection("Poser0", &conn).unwrap();
+    let remote = PoserRemote::on_connection("Poser0", &conn).unwrap();
     let poses = Rc::new(RefCell::new(Vec::new()));
     let p = poses.clone();
     server.on_pose(move |x| p.borrow_mut().push((x.pos, x.quat)));

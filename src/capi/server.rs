@@ -120,7 +120,7 @@ pub extern "C" fn vrpn_server_connection_state(server: *const VrpnServer) -> i32
 /// Makes a device server of interface `kind` with `count` elements on `server`'s connection,
 /// after the checks every binding applies ([`crate::server::limits`]): the count within the
 /// bounds `vrpn.cfg` has, a name clients can open, no other device of the interface under it.
-fn device<T: Object>(
+pub(super) fn device<T: Object>(
     server: *mut VrpnServer,
     name: *const c_char,
     kind: Interface,
@@ -131,7 +131,7 @@ fn device<T: Object>(
         handle::with(server, |s| {
             // SAFETY: C passes a NUL-terminated device name (checked for NULL).
             let name = unsafe { text_arg(name, "device name")? };
-            let n = if kind == Interface::Text {
+            let n = if kind.max_count() == 0 {
                 0
             } else {
                 limits::check_count(kind, Some(count.into()), &count.to_string())
@@ -158,7 +158,10 @@ fn publish_failure(e: PublishError) -> Failure {
 ///
 /// # Safety
 /// `time` is NULL or points to a readable `VrpnTimeVal`.
-unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> Result<TimeVal, Failure> {
+pub(super) unsafe fn time_arg(
+    conn: &Connection,
+    time: *const VrpnTimeVal,
+) -> Result<TimeVal, Failure> {
     if time.is_null() {
         return Ok(conn.now().wall);
     }
@@ -177,7 +180,10 @@ unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> Result<TimeVa
 ///
 /// # Safety
 /// `p` is NULL or points to `N` readable doubles.
-unsafe fn doubles<const N: usize>(p: *const f64, what: &str) -> Result<[f64; N], Failure> {
+pub(super) unsafe fn doubles<const N: usize>(
+    p: *const f64,
+    what: &str,
+) -> Result<[f64; N], Failure> {
     if p.is_null() {
         return Err(Failure::new(
             VrpnStatus::NullArgument,

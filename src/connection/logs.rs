@@ -70,6 +70,16 @@ impl Connection {
             .set_remote_log_folder(folder);
     }
 
+    /// The folder remote log requests are written into, if the server takes them.
+    pub fn remote_log_folder(&self) -> Option<crate::log::LogFolder> {
+        self.inner
+            .core
+            .borrow()
+            .session
+            .remote_log_folder()
+            .cloned()
+    }
+
     /// Logs what a client receives into a file already created (a folder's).
     pub(crate) fn log_incoming_file(&self, file: std::fs::File, path: &std::path::Path) {
         let sink = crate::log::sink_from_file(file, path);

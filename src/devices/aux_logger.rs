@@ -472,3 +472,75 @@ impl ServerDevice for AuxLoggerServer {
             .and_then(|c| c.poll_timeout())
     }
 }
+
+/// The `vrpn.cfg` entry `vrpn_Auxiliary_Logger_Server_Generic NAME CONNECTION_TO_LOG [FOLDER]`.
+pub mod config {
+    use std::path::PathBuf;
+
+    use super::{AuxLoggerServer, Target};
+    use crate::config::{ConfigError, ConfigErrorKind, ConfigLine};
+    use crate::devices::ServerDevice;
+    use crate::driver::registry::{BuildContext, DeviceSpec, Driver, Served};
+    use crate::error::Error;
+    use crate::log::LogFolder;
+
+    /// A parsed entry.
+    #[derive(Clone, Debug, PartialEq, Eq)]
+    pub struct AuxLoggerEntry {
+        /// The logger's name.
+        pub name: String,
+        /// The connection it logs (`host`, `host:port`, `Name@host:port`).
+        pub connection_to_log: String,
+        /// Where the logs go; `None`: the server's `-logdir` folder.
+        pub folder: Option<PathBuf>,
+    }
+
+    /// `vrpn_Auxiliary_Logger_Server_Generic`.
+    pub static AUX_LOGGER: Driver = Driver {
+        keywords: &["vrpn_Auxiliary_Logger_Server_Generic"],
+        parse,
+        hints: &[],
+    };
+
+    fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+        line.need(2, "name, connection_to_log [, folder]")?;
+        let connection_to_log = line.word(1)?.to_string();
+        if let Err(e) = Target::parse(&connection_to_log) {
+            return Err(line.err(ConfigErrorKind::BadValue, e));
+        }
+        Ok(Box::new(AuxLoggerEntry {
+            name: line.name(0)?,
+            connection_to_log,
+            folder: line.arg(2).map(PathBuf::from),
+        }))
+    }
+
+    impl DeviceSpec for AuxLoggerEntry {
+        fn name(&self) -> &str {
+            &self.name
+        }
+
+        fn served(&self) -> Vec<Served<'_>> {
+            Vec::new() // not one of the report interfaces
+        }
+
+        fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+            let folder = match &self.folder {
+                Some(dir) => LogFolder::new(dir).map_err(Error::InvalidArgument)?,
+                None => cx.conn().remote_log_folder().ok_or_else(|| {
+                    Error::InvalidArgument(
+                        "an auxiliary logger writes only inside a folder: add one to the line \
+                         (NAME CONNECTION_TO_LOG FOLDER) or start vrpn_server with -logdir DIR"
+                            .into(),
+                    )
+                })?,
+            };
+            Ok(vec![Box::new(AuxLoggerServer::new(
+                &self.name,
+                cx.conn(),
+                &self.connection_to_log,
+                folder,
+            )?)])
+        }
+    }
+}

@@ -678,6 +678,11 @@ impl ForceDeviceServer {
         id
     }
 
+    /// The connection the device reports on.
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+
     /// Requests and effects that could not be decoded and were ignored.
     pub fn bad_messages(&self) -> u64 {
         self.shared.bad_messages.get()

@@ -66,8 +66,9 @@ pub struct PoserPose {
 pub struct PoserRemote {
     core: RemoteCore,
     ids: PoserIds,
-    pos: [f64; 3],
-    quat: [f64; 4],
+    /// The pose last requested (relative requests accumulate into it, as in C++).
+    pos: std::cell::Cell<[f64; 3]>,
+    quat: std::cell::Cell<[f64; 4]>,
 }
 
 impl Deref for PoserRemote {
@@ -90,45 +91,42 @@ impl PoserRemote {
         Ok(PoserRemote {
             core,
             ids,
-            pos: [0.0; 3],
-            quat: [0.0, 0.0, 0.0, 1.0],
+            pos: std::cell::Cell::new([0.0; 3]),
+            quat: std::cell::Cell::new([0.0, 0.0, 0.0, 1.0]),
         })
     }
 
     fn send_pose(&self, t: TypeId, time: TimeVal) -> Result<(), Error> {
         let mut buf = [0u8; codec::PoseRequest::LEN];
         codec::PoseRequest {
-            pos: self.pos,
-            quat: self.quat,
+            pos: self.pos.get(),
+            quat: self.quat.get(),
         }
         .encode(&mut buf);
         self.send_at(time, t, &buf, class::LOW_LATENCY)
     }
 
     /// Requests an absolute pose.
-    pub fn request_pose(
-        &mut self,
-        time: TimeVal,
-        pos: [f64; 3],
-        quat: [f64; 4],
-    ) -> Result<(), Error> {
-        self.pos = pos;
-        self.quat = quat;
+    pub fn request_pose(&self, time: TimeVal, pos: [f64; 3], quat: [f64; 4]) -> Result<(), Error> {
+        self.pos.set(pos);
+        self.quat.set(quat);
         self.send_pose(self.ids.pose, time)
     }
 
     /// Requests a relative pose: accumulates into the remote's pose (pos += dp, quat = dq·quat)
     /// and sends the accumulated pose, as C++ does.
     pub fn request_pose_relative(
-        &mut self,
+        &self,
         time: TimeVal,
         dpos: [f64; 3],
         dquat: [f64; 4],
     ) -> Result<(), Error> {
-        for (p, d) in self.pos.iter_mut().zip(dpos) {
+        let mut pos = self.pos.get();
+        for (p, d) in pos.iter_mut().zip(dpos) {
             *p += d;
         }
-        self.quat = q_mult(dquat, self.quat);
+        self.pos.set(pos);
+        self.quat.set(q_mult(dquat, self.quat.get()));
         self.send_pose(self.ids.pose_relative, time)
     }
 

@@ -94,3 +94,65 @@ impl ServerDevice for Relay {
         self.upstream.poll_timeout()
     }
 }
+
+/// The `vrpn.cfg` entry `vrpn_Relay DEVICE@HOST[:PORT] [NAME]`.
+pub mod config {
+    use super::Relay;
+    use crate::config::{ConfigError, ConfigErrorKind, ConfigLine};
+    use crate::devices::ServerDevice;
+    use crate::driver::registry::{BuildContext, DeviceSpec, Driver, Served};
+    use crate::error::Error;
+    use crate::name::{DeviceName, Location};
+
+    /// A parsed entry.
+    #[derive(Clone, Debug, PartialEq, Eq)]
+    pub struct RelayEntry {
+        /// The device to re-serve, `Device@host[:port]` (or `Device@file:LOG`).
+        pub source: String,
+        /// The name it is served under here.
+        pub name: String,
+    }
+
+    /// `vrpn_Relay` (our extension: C++ has no relay).
+    pub static RELAY: Driver = Driver {
+        keywords: &["vrpn_Relay"],
+        parse,
+        hints: &[],
+    };
+
+    fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+        line.need(1, "device@host[:port] [, name]")?;
+        let source = line.word(0)?.to_string();
+        let parsed =
+            DeviceName::parse(&source).map_err(|e| line.err(ConfigErrorKind::BadName, e))?;
+        if parsed.location == Location::Loopback {
+            return Err(line.err(
+                ConfigErrorKind::BadName,
+                format!("{source:?}: a relay re-serves a device of another server or a log"),
+            ));
+        }
+        let name = match line.arg(1) {
+            Some(_) => line.name(1)?,
+            None => parsed.device.clone(),
+        };
+        Ok(Box::new(RelayEntry { source, name }))
+    }
+
+    impl DeviceSpec for RelayEntry {
+        fn name(&self) -> &str {
+            &self.name
+        }
+
+        fn served(&self) -> Vec<Served<'_>> {
+            Vec::new() // whatever the device serves, unknown until it is reached
+        }
+
+        fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+            Ok(vec![Box::new(Relay::new(
+                cx.conn(),
+                &self.source,
+                Some(&self.name),
+            )?)])
+        }
+    }
+}

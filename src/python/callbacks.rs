@@ -104,6 +104,17 @@ impl Slot {
         });
     }
 
+    /// Calls the callable with one integer argument.
+    pub(crate) fn call_int(&self, value: i64) {
+        Python::attach(|py| {
+            let Some(f) = self.get(py) else { return };
+            let f = f.bind(py);
+            if let Err(e) = f.call1((value,)) {
+                stash(py, e, f);
+            }
+        });
+    }
+
     /// Calls the callable with no argument.
     pub(crate) fn call0(&self) {
         Python::attach(|py| {

@@ -36,7 +36,7 @@ trait Release {
 }
 
 /// A device server's Rust side, until its `close()` or its `Server`'s.
-struct Held<T>(RefCell<Option<Rc<T>>>);
+pub(super) struct Held<T>(RefCell<Option<Rc<T>>>);
 
 impl<T> Release for Held<T> {
     fn release(&self) {
@@ -94,7 +94,7 @@ impl Server {
     }
 
     /// Makes a device server of `kind` named `name` with `n` elements (already checked).
-    fn publish<T: 'static>(
+    pub(super) fn publish<T: 'static>(
         &self,
         kind: Interface,
         name: &str,
@@ -288,7 +288,7 @@ fn parse_severity(s: &str) -> PyResult<TextSeverity> {
 }
 
 /// The count argument of a device server (`default` when omitted), checked.
-fn count_arg(obj: Option<&Bound<'_, PyAny>>, kind: Interface) -> PyResult<usize> {
+pub(super) fn count_arg(obj: Option<&Bound<'_, PyAny>>, kind: Interface) -> PyResult<usize> {
     match obj {
         Some(o) => count(o, kind),
         None => Ok(1),
@@ -296,14 +296,14 @@ fn count_arg(obj: Option<&Bound<'_, PyAny>>, kind: Interface) -> PyResult<usize>
 }
 
 /// A device server's Rust side as its Python object reaches it.
-fn held<'a, T>(h: &'a Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<Rc<T>> {
+pub(super) fn held<'a, T>(h: &'a Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<Rc<T>> {
     let h: &'a Rc<Held<T>> = h.get(class)?;
     let inner = h.0.borrow();
     inner.clone().ok_or_else(|| closed(class))
 }
 
 /// Closes a device server (its name is free again on the server).
-fn close_held<T>(h: &Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<()> {
+pub(super) fn close_held<T>(h: &Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<()> {
     h.get(class)?.release();
     Ok(())
 }

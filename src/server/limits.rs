@@ -26,6 +26,12 @@ pub enum Interface {
     Dial,
     /// A text sender (no count).
     Text,
+    /// An analog output device: 1 to [`MAX_CHANNELS`] channels.
+    AnalogOutput,
+    /// A poser (no count).
+    Poser,
+    /// A force device (no count).
+    ForceDevice,
 }
 
 impl Interface {
@@ -37,6 +43,9 @@ impl Interface {
             Interface::Analog => "analog device",
             Interface::Dial => "dial device",
             Interface::Text => "text sender",
+            Interface::AnalogOutput => "analog output device",
+            Interface::Poser => "poser",
+            Interface::ForceDevice => "force device",
         }
     }
 
@@ -59,6 +68,8 @@ impl Interface {
             Interface::Analog => "channels",
             Interface::Dial => "dials",
             Interface::Text => "messages",
+            Interface::AnalogOutput => "channels",
+            Interface::Poser | Interface::ForceDevice => "elements",
         }
     }
 
@@ -69,7 +80,8 @@ impl Interface {
             Interface::Button => MAX_BUTTONS,
             Interface::Analog => MAX_CHANNELS,
             Interface::Dial => MAX_DIALS,
-            Interface::Text => 0,
+            Interface::AnalogOutput => MAX_CHANNELS,
+            Interface::Text | Interface::Poser | Interface::ForceDevice => 0,
         };
         max as usize
     }

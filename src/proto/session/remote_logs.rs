@@ -59,6 +59,11 @@ impl Session {
         self.logs.remote_folder = folder;
     }
 
+    /// The folder for peers' log requests, if any.
+    pub fn remote_log_folder(&self) -> Option<&LogFolder> {
+        self.logs.remote_folder.as_ref()
+    }
+
     /// The cookie's log-mode digit for a new greeting.
     pub(super) fn greeting_log_mode(&self) -> u8 {
         match (&self.kind, &self.remote_log_request) {
