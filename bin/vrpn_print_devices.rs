@@ -18,8 +18,8 @@ use std::time::{Duration, Instant};
 use serde::ser::{SerializeMap, Serializer as _};
 use serde_json::ser::{CompactFormatter, Compound};
 use vrpn::{
-    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, TextReceiver,
-    TextSeverity, TimeVal, TrackerRemote,
+    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, NoticeKind,
+    TextReceiver, TextSeverity, TimeVal, TrackerRemote,
 };
 
 use output::{errln, outln};
@@ -40,6 +40,8 @@ const USAGE: &str =
                      DEVICE@file:FILE
   --list HOST[:PORT] print the device names the server announces, then exit
   -h, --help         print this help
+Exit status: 0 when stopped (^C, --seconds, closed output), 1 when a server
+offers no device of a name given, 2 for a bad name or option.
   --version          print the version";
 
 /// What the command line asks for.
@@ -264,6 +266,9 @@ impl Opened {
 fn print(o: &PrintOptions) -> u8 {
     let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
+    let mut watched: Vec<Connection> = Vec::new();
+    // Set when a server says it offers no device of a name given: nothing will ever come.
+    let missing = Rc::new(Cell::new(false));
     for name in &o.names {
         if let Err(e) = DeviceName::parse(name) {
             errln!("{PROGRAM}: {e}");
@@ -276,6 +281,17 @@ fn print(o: &PrintOptions) -> u8 {
                 return 2;
             }
         };
+        if !watched.iter().any(|c| c.same_as(tracker.connection())) {
+            let m = missing.clone();
+            // The connection's notices, printed as the default printer would, and matched.
+            tracker.connection().on_notice(move |n| {
+                errln!("vrpn: {n}");
+                if matches!(n.kind, NoticeKind::NoSuchDevice { .. }) {
+                    m.set(true);
+                }
+            });
+            watched.push(tracker.connection().clone());
+        }
         if let Some(path) = &o.log {
             let conn = tracker.connection();
             if !logged.iter().any(|c: &Connection| c.same_as(conn)) {
@@ -320,6 +336,9 @@ fn print(o: &PrintOptions) -> u8 {
                 errln!("{PROGRAM}: {e}");
                 return 1;
             }
+        }
+        if missing.get() {
+            return 1;
         }
         // Sleep until data arrives (or 10 ms for ping timers and reconnect attempts).
         if let Some(d) = devices.first() {

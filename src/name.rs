@@ -79,7 +79,15 @@ impl DeviceName {
         };
         let (device, location_text) = match (name.find('@'), name.rfind('@')) {
             (Some(first), Some(last)) => (&name[..first], &name[last + 1..]),
-            _ => (name, name),
+            // C++ would take the whole name for a host name and fail to resolve it; the
+            // missing `@HOST` is almost always what is wrong.
+            _ if name.is_empty() => return Err(err("the name is empty")),
+            _ => {
+                return Err(err(&format!(
+                    "it has no '@': a remote device is named DEVICE@HOST, for example \
+                     \"{name}@localhost\""
+                )))
+            }
         };
         if device.is_empty() {
             return Err(err("the device name before '@' is empty"));
@@ -214,5 +222,12 @@ mod tests {
         assert!(DeviceName::parse("@host").is_err());
         assert!(DeviceName::parse("T@").is_err());
         assert!(DeviceName::parse("T@tcp://:3883").is_err());
+        // A name without `@HOST` says so (C++ would try to resolve "Tracker0" as a host).
+        let e = DeviceName::parse("Tracker0").unwrap_err().to_string();
+        assert!(
+            e.contains("no '@'") && e.contains("Tracker0@localhost"),
+            "{e}"
+        );
+        assert!(!e.contains("resolve"), "{e}");
     }
 }
