@@ -99,6 +99,7 @@ pub use connection::{
     Notice, NoticeKind, ServiceClass, Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
+pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};
 pub use devices::builder::RemoteBuilder;
 pub use devices::button::{
     ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonState, ButtonStates,

@@ -7,6 +7,7 @@ use crate::time::Now;
 
 pub mod analog;
 pub mod analog_output;
+pub mod aux_logger;
 pub mod base;
 pub mod builder;
 pub mod button;
@@ -30,6 +31,7 @@ builder::remote_builder!(
     poser::PoserRemote,
     force::ForceDeviceRemote,
     text_device::TextReceiver,
+    aux_logger::AuxLoggerRemote,
 );
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest

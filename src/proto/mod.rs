@@ -29,7 +29,7 @@ use crate::time::TimeVal;
 use crate::wire;
 
 pub use notice::{DropReason, NameKind, Notice, NoticeKind, Severity};
-pub use session::Session;
+pub use session::{RemoteLogRequest, Session};
 
 /// What a connection is doing now.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

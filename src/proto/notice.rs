@@ -100,6 +100,9 @@ pub enum DropReason {
     },
     /// Server: a peer that had not greeted yet gave way to a new client (every slot taken).
     MadeRoom,
+    /// Server: the peer asked to be logged under names this server cannot honour (closing
+    /// the connection is how a VRPN client learns that remote logging failed).
+    RemoteLogRefused,
 }
 
 /// What a [`Notice`] is about: the typed part a program can match on.
@@ -166,6 +169,11 @@ pub enum NoticeKind {
     },
     /// A peer asked this side to write log files; refused.
     RemoteLogRefused {
+        /// The peer.
+        peer: String,
+    },
+    /// Server: a peer asked to be logged, and its logs were opened in the operator's folder.
+    RemoteLogOpened {
         /// The peer.
         peer: String,
     },

@@ -163,6 +163,7 @@ macro_rules! fixed_payload {
 
 pub mod analog;
 pub mod analog_output;
+pub mod aux_logger;
 pub mod button;
 pub mod clock;
 pub mod dial;
