@@ -130,3 +130,7 @@ struct ReadmeDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/USING.md")]
 struct UsingDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/IMAGER.md")]
+struct ImagerDoctests;

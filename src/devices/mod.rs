@@ -13,8 +13,12 @@ pub mod builder;
 pub mod button;
 pub mod dial;
 pub mod force;
+pub mod imager;
 pub mod latest;
+pub mod mutex;
+pub mod peer_mutex;
 pub mod poser;
+pub mod shared_object;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
@@ -31,6 +35,8 @@ builder::remote_builder!(
     poser::PoserRemote,
     force::ForceDeviceRemote,
     text_device::TextReceiver,
+    imager::ImagerRemote,
+    imager::ImagerPoseRemote,
     aux_logger::AuxLoggerRemote,
 );
 
