@@ -302,10 +302,11 @@ fn csv(args: Args) -> Result<(), Fail> {
         .map_err(|e| Fail(format!("vrpn_log: {}: {e}", reader.path().display()), 1))?;
     let result = match args.output.as_deref() {
         Some(out_path) if out_path != "-" => {
-            let file = File::create(out_path).map_err(|e| io_fail(out_path, e))?;
+            let file = File::create(out_path)
+                .map_err(|e| io_fail(&format!("cannot create output file {out_path}"), e))?;
             let mut w = BufWriter::new(file);
             let r = tools::write_csv(&reader, &plan, &mut w).and_then(|r| w.flush().map(|_| r));
-            r.map_err(|e| io_fail(out_path, e))?
+            r.map_err(|e| io_fail(&format!("writing output file {out_path}"), e))?
         }
         _ => {
             let mut w = BufWriter::new(io::stdout().lock());

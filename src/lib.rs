@@ -71,9 +71,11 @@
 // feature.
 #[cfg(any(feature = "capi", test))]
 pub mod capi;
+pub mod config;
 pub mod connection;
 pub mod devices;
 pub use connection::dispatch;
+pub mod driver;
 #[path = "../drivers/mod.rs"]
 pub mod drivers;
 mod error;
@@ -91,6 +93,9 @@ pub mod proto;
 mod python;
 pub mod serial;
 pub mod server;
+// Device simulators and their rigs: test tools, never in the default library.
+#[cfg(any(test, feature = "sim"))]
+pub mod sim;
 pub mod time;
 pub mod wire;
 

@@ -228,6 +228,35 @@ fn c_api_checks() {
 }
 
 #[test]
+fn c_discovery_texts_and_replay() {
+    let scratch = Scratch::new("discovery");
+    let exe = scratch.0.join("discovery_replay");
+    compile("tests/c/discovery_replay.c", &exe, Link::Shared);
+    let server = common::start_server(
+        "vrpn_Tracker_NULL Tracker0 1 10.0\nvrpn_Text_Example Text0 0.05 hello from the server\n",
+        0,
+    );
+    // A log of Tracker0: 20 poses 25 ms apart, x = 0 .. 19 (what the C program expects).
+    let log = scratch.0.join("tracker.vrpn");
+    {
+        let conn = vrpn::Connection::server(Some([127, 0, 0, 1].into()), 0).unwrap();
+        conn.log_outgoing(log.to_str().unwrap()).unwrap();
+        let tracker = vrpn::TrackerServer::new("Tracker0", &conn, 1).unwrap();
+        let t0 = conn.now().wall;
+        for i in 0..20u32 {
+            let t = t0.plus(std::time::Duration::from_millis(25 * u64::from(i)));
+            tracker
+                .report_pose(0usize, t, [f64::from(i), 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+                .unwrap();
+        }
+        conn.close_logs().unwrap();
+    }
+    let at = format!("127.0.0.1:{}", server.port);
+    let out = run(&exe, &[&at, log.to_str().unwrap()]);
+    assert!(out.contains("checks passed"), "{out}");
+}
+
+#[test]
 fn c_tracker_client_reads_vrpn_server() {
     let scratch = Scratch::new("client");
     let exe = scratch.0.join("tracker_client");

@@ -31,9 +31,11 @@
 #![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 pub mod client;
+pub mod connection;
 mod handle;
 pub mod remotes;
 pub mod server;
+pub mod text;
 pub mod types;
 
 use std::cell::RefCell;

@@ -12,6 +12,7 @@ pub mod base;
 pub mod builder;
 pub mod button;
 pub mod dial;
+pub mod examples;
 pub mod force;
 pub mod imager;
 pub mod latest;
