@@ -183,16 +183,22 @@ fn is_replay(name: &str) -> bool {
 /// Output streams: data (reports, device texts) on stdout, diagnostics on stderr, once. The
 /// library's default printer would write device warnings to stderr beside the report line
 /// and notices in its own format; it is turned off and each connection's notices come here.
-fn report_notices(conn: &Connection, missing: Option<&Rc<Cell<bool>>>) {
+fn report_notices(conn: &Connection, missing: Option<&Missing>) {
     let missing = missing.cloned();
     conn.on_notice(move |n| {
         errln!("{PROGRAM}: {}", n.text);
         // The server offers no device of a name given: nothing will ever come of it.
-        if let (NoticeKind::NoSuchDevice { .. }, Some(m)) = (&n.kind, &missing) {
-            m.set(true);
+        if let (NoticeKind::NoSuchDevice { device, .. }, Some(m)) = (&n.kind, &missing) {
+            let mut m = m.borrow_mut();
+            if !m.contains(device) {
+                m.push(device.clone());
+            }
         }
     });
 }
+
+/// The device names servers said they do not offer.
+type Missing = Rc<std::cell::RefCell<Vec<String>>>;
 
 /// The clock-synchronisation estimate of a device's connection as of the last loop pass:
 /// offset (server clock minus ours) and its uncertainty, in seconds; `None` while no sync is in
@@ -372,8 +378,8 @@ fn print(o: &PrintOptions) -> u8 {
     let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
     let mut watched: Vec<Connection> = Vec::new();
-    // Set when a server says it offers no device of a name given: nothing will ever come.
-    let missing = Rc::new(Cell::new(false));
+    // The names a server says it does not offer: nothing will ever come of them.
+    let missing: Missing = Rc::default();
     for (name, shown) in &o.names {
         let (name, shown) = (name.as_str(), *shown);
         if let Err(e) = DeviceName::parse(name) {
@@ -460,8 +466,9 @@ fn print(o: &PrintOptions) -> u8 {
                 return 1;
             }
         }
-        if missing.get() {
-            return 1;
+        // Every device named is missing: nothing will ever be printed.
+        if missing.borrow().len() == devices.len() {
+            break;
         }
         if o.until_eof && watched.iter().all(replay_done) {
             break;
@@ -471,7 +478,9 @@ fn print(o: &PrintOptions) -> u8 {
             let _ = d.tracker.connection().wait(Duration::from_millis(10));
         }
     }
-    0
+    // A device a server does not offer is an error, whether or not others printed.
+    let any_missing = !missing.borrow().is_empty();
+    u8::from(any_missing)
 }
 
 /// True once a replay connection has played every message of its file.
