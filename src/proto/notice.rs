@@ -184,6 +184,9 @@ pub enum NoticeKind {
     },
     /// Writing a log (or opening a client's incoming log on a server) failed.
     LogFailed,
+    /// Server: what a client's forwarding request (the Forwarder brain) did: a port opened,
+    /// a message type forwarded, or why not.
+    Forwarding,
     /// A replayed log stopped at damaged data (every whole message before it was played).
     ReplayDamaged,
 }
