@@ -796,6 +796,13 @@ VrpnStatus vrpn_server_mainloop(VrpnServer *server);
 VrpnStatus vrpn_server_wait(VrpnServer *server, uint32_t timeout_ms);
 
 /**
+ * The server's descriptor for the program's own `poll`/`select`/`epoll` loop (see
+ * `vrpn_tracker_fd`): readable when a client sends something or the server has timed work
+ * due. Never read it or close it. A negative status on failure.
+ */
+int32_t vrpn_server_fd(const VrpnServer *server);
+
+/**
  * The port the server listens on, or a negative status.
  */
 int32_t vrpn_server_port(const VrpnServer *server);
@@ -943,6 +950,53 @@ VrpnStatus vrpn_text_remove_callback(VrpnText *text, uint64_t id);
  * Number of messages received so far (saturated at INT32_MAX), or a negative status.
  */
 int32_t vrpn_text_received(const VrpnText *text);
+
+/**
+ * Blocks (without spinning: in the reactor's poll) until data arrives for the tracker's
+ * connection, the connection has timed work due (a reconnection attempt, a liveness ping),
+ * or `timeout_ms` pass. Returns `VRPN_STATUS_OK` when data arrived, `VRPN_STATUS_NO_DATA`
+ * otherwise; call `vrpn_tracker_mainloop` next.
+ */
+VrpnStatus vrpn_tracker_wait(VrpnTracker *tracker, uint32_t timeout_ms);
+
+/**
+ * The descriptor to wait on for reading in the program's own `poll`/`select`/`epoll` loop:
+ * readable when data arrives or the connection's next timed work is due (each mainloop sets
+ * a timer in it). Call `vrpn_tracker_mainloop` when it is readable. The descriptor belongs
+ * to the library: never read it or close it. A negative status on failure
+ * (`VRPN_STATUS_UNSUPPORTED` for a replay, which has no sockets).
+ */
+int32_t vrpn_tracker_fd(const VrpnTracker *tracker);
+
+/**
+ * `vrpn_tracker_wait` for a button remote.
+ */
+VrpnStatus vrpn_button_wait(VrpnButton *button, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for a button remote.
+ */
+int32_t vrpn_button_fd(const VrpnButton *button);
+
+/**
+ * `vrpn_tracker_wait` for an analog remote.
+ */
+VrpnStatus vrpn_analog_wait(VrpnAnalog *analog, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for an analog remote.
+ */
+int32_t vrpn_analog_fd(const VrpnAnalog *analog);
+
+/**
+ * `vrpn_tracker_wait` for a dial remote.
+ */
+VrpnStatus vrpn_dial_wait(VrpnDial *dial, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for a dial remote.
+ */
+int32_t vrpn_dial_fd(const VrpnDial *dial);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -120,7 +120,7 @@ pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
 pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
-pub use net::Reactor;
+pub use net::{Reactor, Waiter, Wake};
 pub use time::{Now, TimeVal};
 
 /// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
@@ -139,3 +139,23 @@ struct UsingDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/IMAGER.md")]
 struct ImagerDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/MUTEX.md")]
+struct MutexDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SHARED_OBJECTS.md")]
+struct SharedObjectDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/FUNCTION_GENERATOR.md")]
+struct FunctionGeneratorDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SOUND.md")]
+struct SoundDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/REDUNDANT_TRANSMISSION.md")]
+struct RedundantDoctests;

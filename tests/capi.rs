@@ -227,6 +227,37 @@ fn c_api_checks() {
     assert!(out.contains("checks passed"), "{out}");
 }
 
+/// `vrpn_tracker_wait` and a `poll()` on `vrpn_tracker_fd` read a 60 Hz two-sensor tracker
+/// with about one wake-up per datagram (both sensors' poses), not one per millisecond.
+#[test]
+fn c_wait_and_fd_do_not_spin() {
+    let scratch = Scratch::new("wait");
+    let exe = scratch.0.join("wait_checks");
+    compile("tests/c/wait_checks.c", &exe, Link::Shared);
+    let server = common::start_server("vrpn_Tracker_NULL Tracker0 2 60.0\n", 0);
+    let name = format!("Tracker0@127.0.0.1:{}", server.port);
+    let out = run(&exe, &[&name, "2"]);
+    assert!(out.contains("wait checks passed"), "{out}");
+    for way in ["wait", "fd"] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{way} ")))
+            .unwrap_or_else(|| panic!("no {way} line in {out}"));
+        let field = |k: &str| -> u64 {
+            line.split_whitespace()
+                .find_map(|w| w.strip_prefix(k))
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| panic!("no {k} in {line}"))
+        };
+        let (poses, wakeups) = (field("poses="), field("wakeups="));
+        assert!(poses >= 120, "{way}: {poses} poses in 2 s: {out}");
+        assert!(
+            wakeups <= 2 * poses,
+            "{way}: {wakeups} wake-ups for {poses} poses"
+        );
+    }
+}
+
 #[test]
 fn c_discovery_texts_and_replay() {
     let scratch = Scratch::new("discovery");

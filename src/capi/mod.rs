@@ -37,6 +37,7 @@ pub mod remotes;
 pub mod server;
 pub mod text;
 pub mod types;
+pub mod waiting;
 
 use std::cell::RefCell;
 use std::ffi::{c_char, CStr, CString};

@@ -82,6 +82,17 @@ pub extern "C" fn vrpn_server_wait(server: *mut VrpnServer, timeout_ms: u32) -> 
     }))
 }
 
+/// The server's descriptor for the program's own `poll`/`select`/`epoll` loop (see
+/// `vrpn_tracker_fd`): readable when a client sends something or the server has timed work
+/// due. Never read it or close it. A negative status on failure.
+#[no_mangle]
+pub extern "C" fn vrpn_server_fd(server: *const VrpnServer) -> i32 {
+    match handle::with(server, |s| super::waiting::fd_of(&s.conn)) {
+        Ok(fd) => fd,
+        Err(f) => super::record(f) as i32,
+    }
+}
+
 /// The port the server listens on, or a negative status.
 #[no_mangle]
 pub extern "C" fn vrpn_server_port(server: *const VrpnServer) -> i32 {

@@ -19,6 +19,7 @@ mod remote;
 mod remotes;
 mod server;
 mod values;
+mod waiting;
 
 use pyo3::prelude::*;
 

@@ -4,7 +4,7 @@
 use std::any::Any;
 use std::cell::RefCell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::gc::PyVisit;
@@ -15,6 +15,7 @@ use super::callbacks::{raise_pending, run, Owner, Registry};
 use super::errors::closed;
 use super::owned::Owned;
 use super::values::Notice;
+use super::waiting::{fileno, wait};
 use crate::devices::base::RemoteCore;
 use crate::dispatch::HandlerId;
 use crate::{Connection, ConnectionEvent, ConnectionState};
@@ -46,28 +47,6 @@ pub(crate) fn seconds(timeout: f64) -> PyResult<Duration> {
             "timeout must be a finite number of seconds >= 0, got {timeout}"
         ))
     })
-}
-
-/// Waits until data arrives on `conn`, its next deadline passes or `timeout` ends, with the
-/// GIL released so that other Python threads run meanwhile. A connection is not `Send`, so
-/// it cannot go to the thread-free section: the wait polls it (without blocking) and sleeps
-/// in steps of at most a millisecond between polls; Ctrl-C is honoured at each step.
-pub(crate) fn wait(py: Python<'_>, conn: &Connection, timeout: f64) -> PyResult<bool> {
-    const STEP: Duration = Duration::from_millis(1);
-    let end = Instant::now() + seconds(timeout)?;
-    loop {
-        if run(|| conn.wait(Duration::ZERO))? {
-            return Ok(true);
-        }
-        let now = Instant::now();
-        let due = conn.poll_timeout().map_or(end, |d| d.min(end));
-        if now >= due {
-            return Ok(false);
-        }
-        let nap = (due - now).min(STEP);
-        py.detach(|| std::thread::sleep(nap));
-        py.check_signals()?;
-    }
 }
 
 /// `on_event(name, f)` on `conn`, kept in `reg`.
@@ -258,6 +237,12 @@ impl Remote {
     /// letting other Python threads run; returns whether data arrived. Call `mainloop()` next.
     fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<bool> {
         wait(py, &self.conn()?, timeout)
+    }
+
+    /// The descriptor to wait on in asyncio (`loop.add_reader(r.fileno(), r.mainloop)`) or
+    /// `select`: readable when data arrives or the connection's next timed work is due.
+    fn fileno(&self) -> PyResult<i32> {
+        fileno(&self.conn()?)
     }
 
     /// The device (sender) name, the part before "@".

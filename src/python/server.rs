@@ -23,8 +23,8 @@ use super::errors::{closed, limit, publish};
 use super::owned::Owned;
 use super::remote::{
     on_event, on_notice, on_peer_sender, on_state_change, remove_connection_handlers, state_name,
-    wait,
 };
+use super::waiting::{fileno, wait};
 use super::{time_or_now, to_py};
 use crate::devices::text::TextSeverity;
 use crate::server::limits::{Claim, Interface, Published};
@@ -151,6 +151,12 @@ impl Server {
     /// `mainloop()` next.
     fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<bool> {
         wait(py, &self.conn()?, timeout)
+    }
+
+    /// The descriptor to wait on in asyncio (`loop.add_reader(s.fileno(), s.mainloop)`) or
+    /// `select`: readable when a client sends something or the server has timed work due.
+    fn fileno(&self) -> PyResult<i32> {
+        fileno(&self.conn()?)
     }
 
     /// The port the server listens on.
