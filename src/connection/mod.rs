@@ -44,7 +44,7 @@ use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, Sen
 pub(crate) use liveness::Liveness;
 pub use open::ConnectionOptions;
 pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
-pub use replay_control::ReplayControl;
+pub use replay_control::{FileController, FileControllerIds, ReplayControl};
 pub use service::ServiceClass;
 
 pub use crate::proto::clock::{ClockSyncConfig, Estimate};
@@ -224,7 +224,9 @@ impl Connection {
     pub fn replay_file(path: &str) -> Result<Connection, Error> {
         let replay = crate::log::replay::Replay::open(path).map_err(Error::from_log)?;
         let session = Session::file(replay, path, Limits::default());
-        Ok(Connection::from_parts(session, Shell::none()))
+        let conn = Connection::from_parts(session, Shell::none());
+        conn.serve_file_controller()?;
+        Ok(conn)
     }
 
     /// A new, unshared client connection to `host:port`.

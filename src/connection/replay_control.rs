@@ -1,7 +1,9 @@
-//! Controls of a log replay (C++ `vrpn_File_Connection`): rate, reset, play-to, jump-to.
+//! Controls of a log replay (C++ `vrpn_File_Connection`): rate, reset, play-to and jump-to
+//! (elapsed or absolute file times), bookmarks, a cap per pass, and the `vrpn_File_Controller`
+//! messages that control a replay from elsewhere.
 
 use super::{Connection, Core};
-use crate::log::replay::Replay;
+use crate::log::replay::{Bookmark, Replay};
 use crate::proto::Delivery;
 use crate::time::TimeVal;
 
@@ -125,5 +127,157 @@ impl ReplayControl<'_> {
     /// Seconds between the first and last user messages.
     pub fn length_secs(&self) -> f64 {
         self.conn.with_replay(|r| r.length_secs())
+    }
+}
+
+/// Absolute file times, bookmarks and a cap on what one pass plays.
+impl ReplayControl<'_> {
+    /// Plays, now, every message up to the file time `target` (the log's own timestamps;
+    /// C++ `play_to_filetime`), rewinding first when that is behind the current position.
+    pub fn play_to_filetime(&self, target: TimeVal) {
+        self.conn.with_replay(|r| r.play_to_filetime(target));
+        self.conn.play_due();
+    }
+
+    /// Moves to the file time `target` without delivering the messages in between
+    /// (descriptions on the way are still learned; C++ `jump_to_filetime`). Returns whether
+    /// that time is in the log.
+    pub fn jump_to_filetime(&self, target: TimeVal) -> bool {
+        let inside = self.conn.with_replay(|r| r.jump_to_filetime(target));
+        self.conn.skip_due();
+        inside
+    }
+
+    /// The position now, to come back to with [`go_to_bookmark`](Self::go_to_bookmark).
+    pub fn bookmark(&self) -> Bookmark {
+        self.conn.with_replay(|r| r.bookmark())
+    }
+
+    /// Moves to `bookmark` without delivering the messages in between: the next message
+    /// played is the one that was next when the bookmark was taken. Returns false for a
+    /// bookmark of another log.
+    pub fn go_to_bookmark(&self, bookmark: Bookmark) -> bool {
+        let ok = self.conn.with_replay(|r| r.go_to_bookmark(bookmark));
+        self.conn.skip_due();
+        ok
+    }
+
+    /// Plays at most `max` messages per `mainloop()` or control call (0: no limit; C++
+    /// `limit_messages_played_back`): a pass that reaches it stops at the last message played
+    /// and later passes go on from there (frame by frame through a fast stream).
+    pub fn limit_messages_played_back(&self, max: u32) {
+        self.conn.with_replay(|r| r.limit_messages_played_back(max));
+    }
+
+    /// The limit [`limit_messages_played_back`](Self::limit_messages_played_back) set.
+    pub fn messages_limit(&self) -> u32 {
+        self.conn.with_replay(|r| r.messages_limit())
+    }
+}
+
+impl Connection {
+    /// A replay obeys `vrpn_File_Controller` messages packed on it (C++ `vrpn_File_Connection`
+    /// does): from a [`FileController`] on the same connection, or, through a relay that
+    /// re-serves the replay, from clients over the network.
+    pub(crate) fn serve_file_controller(&self) -> Result<(), crate::Error> {
+        use crate::dispatch::SenderFilter;
+        use crate::wire::payload::file_controller as codec;
+        let ids = FileControllerIds::register(self)?;
+        let only = SenderFilter::Only(ids.sender);
+        self.register_handler(ids.set_replay_rate, only, |m| {
+            if let (Ok(rate), Some(r)) = (codec::decode_rate(m.payload), m.connection().replay()) {
+                r.set_rate(f64::from(rate));
+            }
+        });
+        self.register_handler(ids.reset, only, |m| {
+            if let Some(r) = m.connection().replay() {
+                r.reset();
+            }
+        });
+        self.register_handler(ids.play_to_time, only, |m| {
+            if let (Ok(t), Some(r)) = (
+                codec::decode_play_to_time(m.payload),
+                m.connection().replay(),
+            ) {
+                r.play_to_time(t.as_secs_f64());
+            }
+        });
+        Ok(())
+    }
+}
+
+/// The sender and types of `vrpn_File_Controller` on one connection.
+#[derive(Clone, Copy, Debug)]
+pub struct FileControllerIds {
+    /// `vrpn File Controller`.
+    pub sender: crate::dispatch::SenderId,
+    /// `vrpn_File set_replay_rate`.
+    pub set_replay_rate: crate::dispatch::TypeId,
+    /// `vrpn_File reset`.
+    pub reset: crate::dispatch::TypeId,
+    /// `vrpn_File play_to_time`.
+    pub play_to_time: crate::dispatch::TypeId,
+}
+
+impl FileControllerIds {
+    /// Registers the sender and the three types in C++ order.
+    pub fn register(conn: &Connection) -> Result<FileControllerIds, crate::Error> {
+        use crate::wire::payload::file_controller as codec;
+        Ok(FileControllerIds {
+            sender: conn.register_sender(codec::SENDER)?,
+            set_replay_rate: conn.register_type(codec::SET_REPLAY_RATE)?,
+            reset: conn.register_type(codec::RESET)?,
+            play_to_time: conn.register_type(codec::PLAY_TO_TIME)?,
+        })
+    }
+}
+
+/// Controls a log replay by messages (C++ `vrpn_File_Controller`): on a replay connection it
+/// acts on the replay directly; on a client connection to a server that re-serves a replay
+/// (`vrpn_Relay Device@file:LOG`), it controls that replay over the network. A C++
+/// `vrpn_File_Controller` works the same way against such a server.
+pub struct FileController {
+    conn: Connection,
+    ids: FileControllerIds,
+}
+
+impl FileController {
+    /// A controller on `conn`.
+    pub fn new(conn: &Connection) -> Result<FileController, crate::Error> {
+        Ok(FileController {
+            conn: conn.clone(),
+            ids: FileControllerIds::register(conn)?,
+        })
+    }
+
+    /// Sets the replay rate (1 real time, 0 paused, 2 twice as fast).
+    pub fn set_replay_rate(&self, rate: f32) -> Result<(), crate::Error> {
+        use crate::wire::payload::file_controller as codec;
+        let mut buf = [0u8; codec::RATE_LEN];
+        let n = codec::encode_rate(&mut buf, rate);
+        self.send(self.ids.set_replay_rate, &buf[..n])
+    }
+
+    /// Back to the start of the log (the rate is kept).
+    pub fn reset(&self) -> Result<(), crate::Error> {
+        self.send(self.ids.reset, &[])
+    }
+
+    /// Plays everything up to `elapsed` after the first message of the log.
+    pub fn play_to_time(&self, elapsed: TimeVal) -> Result<(), crate::Error> {
+        use crate::wire::payload::file_controller as codec;
+        let mut buf = [0u8; codec::PLAY_TO_TIME_LEN];
+        let n = codec::encode_play_to_time(&mut buf, elapsed);
+        self.send(self.ids.play_to_time, &buf[..n])
+    }
+
+    fn send(&self, type_id: crate::dispatch::TypeId, payload: &[u8]) -> Result<(), crate::Error> {
+        self.conn.pack_message(
+            self.conn.now().wall,
+            type_id,
+            self.ids.sender,
+            payload,
+            crate::wire::class::RELIABLE,
+        )
     }
 }

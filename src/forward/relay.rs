@@ -11,6 +11,12 @@
 //!
 //! Forwarded messages keep their timestamps (in the relay's clock when it synchronises with
 //! the upstream server, which a server of this crate does) and go out RELIABLE.
+//!
+//! The source may also be a log (`Tracker0@file:session.vrpn`): the relay re-serves its
+//! replay, and clients control it with `vrpn_File_Controller` messages
+//! ([`FileController`](crate::connection::FileController), or C++'s), which the relay passes
+//! to the replay. Each relayed device of one log passes them on, and the controls are
+//! idempotent (a rate, a reset, a time to play to).
 
 use std::time::Instant;
 
@@ -51,6 +57,11 @@ impl Relay {
         down.forward_sender(&parsed.device, &name, ServiceClass::RELIABLE)?;
         let mut up = ConnectionForwarder::new(server, &upstream).from_peers_only(true);
         up.forward_sender(&name, &parsed.device, ServiceClass::RELIABLE)?;
+        if upstream.is_replay() {
+            // A relayed log: clients control its replay (C++ vrpn_File_Controller messages).
+            let controller = crate::wire::payload::file_controller::SENDER;
+            up.forward_sender(controller, controller, ServiceClass::RELIABLE)?;
+        }
         Ok(Relay {
             name,
             source: source.to_string(),
@@ -91,6 +102,13 @@ impl ServerDevice for Relay {
     }
 
     fn next_deadline(&self) -> Option<Instant> {
+        // A relayed replay plays by the clock, not by sockets: look again every millisecond
+        // while it plays (a paused or finished replay needs nothing).
+        if let Some(r) = self.upstream.replay() {
+            if !r.eof() && r.rate() > 0.0 {
+                return Some(Instant::now() + std::time::Duration::from_millis(1));
+            }
+        }
         self.upstream.poll_timeout()
     }
 }

@@ -24,6 +24,25 @@ enum Mode {
     Until(TimeVal),
     /// Exactly the next entry, whatever its time.
     One,
+    /// Every entry before this file offset (a bookmark reached by skipping).
+    ToOffset(usize),
+}
+
+/// A replay position saved by [`Replay::bookmark`], to come back to with
+/// [`Replay::go_to_bookmark`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bookmark {
+    /// Where the next entry starts in the file.
+    offset: usize,
+    /// The file time there.
+    file_time: TimeVal,
+}
+
+impl Bookmark {
+    /// The file time of the bookmark.
+    pub fn file_time(&self) -> TimeVal {
+        self.file_time
+    }
 }
 
 /// One entry to play: its header and where its payload lies in the file.
@@ -53,6 +72,13 @@ pub struct Replay {
     highest: Option<TimeVal>,
     /// Set by a reset: the connection reports it as a dropped-connection event.
     reset_pending: bool,
+    /// At most this many entries per pass or per control (0: no limit; C++
+    /// `limit_messages_played_back`).
+    limit: u32,
+    /// Entries played since the last pass began or control was called.
+    played: u32,
+    /// The entries due are being skipped (a jump), not played: the limit does not apply.
+    skipping: bool,
 }
 
 impl Replay {
@@ -95,6 +121,9 @@ impl Replay {
             lowest,
             highest,
             reset_pending: false,
+            limit: 0,
+            played: 0,
+            skipping: false,
         }
     }
 
@@ -115,6 +144,7 @@ impl Replay {
 
     /// Advances the clock; call once per mainloop pass.
     pub fn tick(&mut self, now: Instant) {
+        self.played = 0;
         if self.mode == Mode::Leading {
             return;
         }
@@ -138,6 +168,12 @@ impl Replay {
     /// The next entry that is due now, if any. Advances the position and the file time.
     pub fn next_due(&mut self) -> Option<DueEntry> {
         if self.eof || self.mode == Mode::Idle {
+            return None;
+        }
+        if self.limit_reached() && self.peek_time().is_some() {
+            // As C++: stop at the last entry played, not at the target; the next pass goes on.
+            // (At the end of the file the walk goes on, to find the end.)
+            self.mode = Mode::Idle;
             return None;
         }
         let bytes = self.reader.bytes();
@@ -164,6 +200,7 @@ impl Replay {
             Mode::Leading => entry.type_id() < 0,
             Mode::Until(t) => entry.time() <= t,
             Mode::One => true,
+            Mode::ToOffset(end) => self.next < end,
         };
         if !due {
             self.finish_mode();
@@ -173,6 +210,7 @@ impl Replay {
             self.mode = Mode::Idle;
         }
         let header = entry.header;
+        self.played = self.played.saturating_add(1);
         let payload_at = self.next + ENTRY_HEADER_LEN;
         self.next = entry.end_offset();
         self.file_time = header.time();
@@ -180,6 +218,7 @@ impl Replay {
     }
 
     fn finish_mode(&mut self) {
+        self.skipping = false;
         match self.mode {
             Mode::Until(t) => self.file_time = t,
             Mode::Leading => self.file_time = self.start_time,
@@ -249,6 +288,7 @@ impl Replay {
         if target < self.file_time {
             self.reset();
         }
+        self.played = 0;
         self.last_wall = None;
         self.mode = Mode::Until(target);
     }
@@ -267,6 +307,7 @@ impl Replay {
             self.reset();
             self.reset_pending = false;
         }
+        self.skipping = true;
         self.mode = Mode::Until(target);
         self.last_wall = None;
         self.highest.is_some_and(|h| target <= h)
@@ -307,5 +348,77 @@ impl Replay {
     /// True while entries remain due in this pass.
     pub fn busy(&self) -> bool {
         self.mode != Mode::Idle && !self.eof
+    }
+
+    // ------------------------------------------------------------ absolute times, bookmarks
+
+    /// Asks to play every entry up to the file time `target` (the log's own timestamps, as
+    /// C++ `play_to_filetime`); rewinds first when that is before the current file time.
+    pub fn play_to_filetime(&mut self, target: TimeVal) {
+        if target < self.file_time {
+            self.reset();
+        }
+        self.played = 0;
+        self.last_wall = None;
+        self.mode = Mode::Until(target);
+    }
+
+    /// Moves to the file time `target` without playing user messages (C++
+    /// `jump_to_filetime`); the connection still learns the descriptions passed over. Returns
+    /// whether the target lies within the log.
+    pub fn jump_to_filetime(&mut self, target: TimeVal) -> bool {
+        if target < self.file_time || self.eof {
+            self.reset();
+            self.reset_pending = false;
+        }
+        self.skipping = true;
+        self.mode = Mode::Until(target);
+        self.last_wall = None;
+        self.highest.is_some_and(|h| target <= h)
+    }
+
+    /// The position now, to come back to with [`go_to_bookmark`](Self::go_to_bookmark).
+    pub fn bookmark(&self) -> Bookmark {
+        Bookmark {
+            offset: self.next,
+            file_time: self.file_time,
+        }
+    }
+
+    /// Moves back (or forward) to `bookmark` without playing user messages: the next entry
+    /// played is the one that was next when the bookmark was taken. Returns false (and moves
+    /// nothing) for a bookmark that does not lie on an entry of this log.
+    pub fn go_to_bookmark(&mut self, bookmark: Bookmark) -> bool {
+        if bookmark.offset < COOKIE_LEN || bookmark.offset > self.reader.bytes().len() {
+            return false;
+        }
+        if bookmark.offset < self.next || self.eof {
+            self.reset();
+            self.reset_pending = false;
+        }
+        self.skipping = true;
+        self.mode = Mode::ToOffset(bookmark.offset);
+        self.last_wall = None;
+        true
+    }
+
+    /// Plays at most `max` entries per pass or control call, 0 for no limit (C++
+    /// `limit_messages_played_back`): a pass that reaches the limit stops at the last entry
+    /// played and the replay goes on from there, so a fast stream replays frame by frame
+    /// instead of all at once. Jumps are not limited.
+    pub fn limit_messages_played_back(&mut self, max: u32) {
+        self.limit = max;
+    }
+
+    /// The limit set by [`limit_messages_played_back`](Self::limit_messages_played_back).
+    pub fn messages_limit(&self) -> u32 {
+        self.limit
+    }
+
+    fn limit_reached(&self) -> bool {
+        self.limit > 0
+            && self.played >= self.limit
+            && !self.skipping
+            && matches!(self.mode, Mode::Until(_))
     }
 }

@@ -18,10 +18,19 @@ use crate::wire::{MAX_IDS, MAX_NAME_LEN};
 
 /// Sender 0 on every VRPN connection.
 pub const CONTROL_SENDER: &str = "VRPN Control";
-/// True for the senders of the protocol itself ([`CONTROL_SENDER`] and the clock
-/// synchronisation's), which no peer offers as a device.
+/// True for the senders of the protocol itself ([`CONTROL_SENDER`], the clock
+/// synchronisation's, and the controls of forwarding and of log replay that C++ and this
+/// crate register on every server and replay), which no peer offers as a device.
 pub(crate) fn is_protocol_sender(name: &[u8]) -> bool {
-    name == CONTROL_SENDER.as_bytes() || name == crate::wire::payload::clock::SENDER.as_bytes()
+    use crate::wire::payload::{clock, file_controller, forwarder};
+    [
+        CONTROL_SENDER,
+        clock::SENDER,
+        forwarder::SENDER,
+        file_controller::SENDER,
+    ]
+    .iter()
+    .any(|s| name == s.as_bytes())
 }
 
 /// Local event: the first peer finished its handshake.

@@ -180,6 +180,7 @@ pub mod aux_logger;
 pub mod button;
 pub mod clock;
 pub mod dial;
+pub mod file_controller;
 pub mod fixed_text;
 pub mod force;
 pub mod forwarder;
