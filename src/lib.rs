@@ -79,6 +79,7 @@ pub mod drivers;
 mod error;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod hid;
 pub mod layered;
 pub mod log;
 pub mod name;
