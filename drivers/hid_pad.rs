@@ -210,6 +210,7 @@ pub struct PadDriver<T: PadDecoder> {
     /// Whether a client is connected, as the connection last said, and whether the decoder
     /// has heard it.
     clients: Rc<Cell<(bool, bool)>>,
+    conn: Connection,
     last_now: Option<Instant>,
     skipped: u64,
     last_skip_text: Option<Instant>,
@@ -239,6 +240,7 @@ impl<T: PadDecoder> PadDriver<T> {
             next_repeat: None,
             open: false,
             clients,
+            conn: conn.clone(),
             last_now: None,
             skipped: 0,
             last_skip_text: None,
@@ -292,7 +294,7 @@ impl<T: PadDecoder> HidDriver for PadDriver<T> {
         self.open = true;
         self.last_now = Some(now.mono);
         self.decoder.opened(&mut self.pad.state, ops);
-        let (any, _) = self.clients.get();
+        let any = self.conn.connected_peers() > 0;
         self.clients.set((any, true));
         self.decoder.clients(any, ops);
         self.next_repeat = self

@@ -9,6 +9,8 @@ pub mod dyna;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+#[cfg(test)]
+mod hid_e2e;
 pub mod hid_pad;
 pub mod joylin;
 pub mod magellan;

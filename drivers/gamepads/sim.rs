@@ -206,3 +206,66 @@ pub fn shield_stealth(
     r[17] = extra;
     r
 }
+
+/// A few reports exercising the axes, buttons and hats of the controller `keyword` names.
+pub fn samples(keyword: &str) -> Vec<Vec<u8>> {
+    match keyword {
+        "vrpn_Microsoft_SideWinder_Precision_2" => vec![
+            sidewinder_precision_2([0, 255, 131, 200], 0x81, 3),
+            sidewinder_precision_2([128; 4], 0, 8),
+        ],
+        "vrpn_Microsoft_SideWinder" => {
+            vec![sidewinder([140, 10, 128], 0x02), sidewinder([0; 3], 0x80)]
+        }
+        "vrpn_Microsoft_Controller_Raw_Xbox_S" => vec![
+            xbox_s([32767, -32768], [16000, 0], 0x0a05, 5),
+            xbox_s([0; 2], [-20000, 30000], 0, 8),
+        ],
+        "vrpn_Microsoft_Controller_Raw_Xbox_360"
+        | "vrpn_Microsoft_Controller_Raw_Xbox_360_Wireless"
+        | "vrpn_Afterglow_Ax1_For_Xbox_360" => vec![
+            xbox_360(
+                [0x8000, 0x8000 + 20000],
+                [0x8000 + 9000, 0x8000 - 9000],
+                0xff,
+                0x11,
+                0x02,
+                6,
+            ),
+            xbox_360([0x8000; 2], [0x8000; 2], 0x10, 0, 0, 0),
+        ],
+        "vrpn_Logitech_Extreme_3D_Pro" => vec![
+            logitech_extreme_3d_pro(1023, 0, 148, 0, 0x0801, 7),
+            logitech_extreme_3d_pro(512, 512, 128, 128, 0, 8),
+        ],
+        "vrpn_Saitek_ST290_Pro" => vec![
+            saitek_st290_pro([0, 64, 128, 255], 0x31, 1),
+            saitek_st290_pro([128; 4], 0, 6),
+        ],
+        "vrpn_CHProducts_Fighterstick_USB" => vec![
+            ch_fighterstick([128, 0, 255], 0x9, 2, [8, 1, 4], 2),
+            ch_fighterstick([128; 3], 0, 0, [0; 3], 4),
+        ],
+        "vrpn_Retrolink_GameCube" => vec![
+            retrolink_gamecube([0, 255, 128, 1], 0x9f, 3),
+            retrolink_gamecube([128; 4], 0, 15),
+        ],
+        "vrpn_Retrolink_Genesis" => {
+            vec![retrolink_genesis(0xa5, Some(5)), retrolink_genesis(0, None)]
+        }
+        "vrpn_Futaba_InterLink_Elite" => vec![
+            futaba(128, 200, 10, 130, 255, 0xa2 | 0x09, 0x41),
+            futaba(0, 128, 255, 200, 128, 0x03, 0),
+        ],
+        "vrpn_nVidia_shield_USB" => vec![
+            shield(0x8001, 7, [65535, 0, 32767, 32768], [65535, 0]),
+            shield_report2(true, true, 255, 51),
+            shield(0, 8, [32767; 4], [0, 0]),
+        ],
+        "vrpn_nVidia_shield_stealth_USB" => vec![
+            shield_stealth(0x03, true, 0x05, 2, [0, 65535, 1, 2], [0, 65535]),
+            shield_stealth(0, false, 0, 8, [32767; 4], [0; 2]),
+        ],
+        _ => Vec::new(),
+    }
+}

@@ -259,3 +259,80 @@ fn table_and_ids() {
     assert_eq!(parse_hex_id("c21d"), Some(0xc21d));
     assert_eq!(parse_hex_id("xyz"), None);
 }
+
+#[test]
+fn every_controller_end_to_end() {
+    use crate::drivers::hid_e2e::{check, Entry};
+    let entries = MODELS
+        .iter()
+        .map(|m| Entry {
+            keyword: m.keyword,
+            vendor: m.vendor,
+            product: m.product,
+            interface: 0,
+            channels: m.channels,
+            buttons: m.buttons,
+            build: Box::new(
+                move |name: &str, conn: &crate::Connection, hub: &crate::hid::DeviceHub| {
+                    super::build(m, name, None, conn, hub)
+                },
+            ),
+            decoder: super::Decoder {
+                decode: m.decode,
+                repeat: m.repeat,
+            },
+            samples: {
+                let s = sim::samples(m.keyword);
+                assert!(!s.is_empty(), "{} has no samples", m.keyword);
+                s
+            },
+        })
+        .collect();
+    check(entries);
+}
+
+/// Controllers whose C++ driver sends the whole Analog every 1/30 s do so here too, while
+/// open; the others send only changes.
+#[test]
+fn the_analog_repeats_at_30_hz_where_cpp_repeats_it() {
+    use crate::hid::rig::Rig;
+    use std::cell::Cell;
+    use std::rc::Rc;
+    use std::time::Duration;
+    let mut rig = Rig::new();
+    rig.connect();
+    let mut counts = Vec::new();
+    for (i, kw) in [
+        "vrpn_Microsoft_Controller_Raw_Xbox_360",
+        "vrpn_nVidia_shield_USB",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let m = model(kw).unwrap();
+        let name = format!("Pad{i}");
+        rig.devices
+            .push(super::build(m, &name, None, &rig.server, &rig.hub).unwrap());
+        let ar = crate::AnalogRemote::on_connection(&name, &rig.client).unwrap();
+        let n = Rc::new(Cell::new(0u32));
+        let c = n.clone();
+        ar.on_report(move |_| c.set(c.get() + 1));
+        let l = rig.plug(20 + i as u32, m.vendor, m.product, 0, kw);
+        let end = rig.accept(&l);
+        end.send_report(&sim::samples(kw)[0]).unwrap();
+        counts.push((n, ar, end, l));
+    }
+    rig.until("first reports", |_| counts.iter().all(|c| c.0.get() >= 1));
+    let before: Vec<u32> = counts.iter().map(|c| c.0.get()).collect();
+    rig.run_for(Duration::from_millis(400));
+    let repeats = counts[0].0.get() - before[0];
+    assert!(
+        (6..=14).contains(&repeats),
+        "Xbox 360 repeats in 0.4 s: {repeats}"
+    );
+    assert_eq!(
+        counts[1].0.get(),
+        before[1],
+        "the Shield sends only changes"
+    );
+}

@@ -43,3 +43,22 @@ pub fn report_0x17() -> Vec<u8> {
     r.resize(13, 0);
     r
 }
+
+/// A few reports exercising every axis and some buttons of `model`.
+pub fn samples(model: &Model) -> Vec<Vec<u8>> {
+    match model.layout {
+        Layout::Classic => vec![
+            translation(100, -250, 401),
+            rotation(-401, 7, -32768),
+            buttons(model, 0b101),
+            translation(0, 0, -3),
+            buttons(model, 1 << (model.buttons - 1)),
+        ],
+        Layout::ProWireless => vec![
+            six_axes([350, -175, 1, -351, 0, 12]),
+            buttons(model, 1 << 31 | 1),
+            report_0x17(),
+            buttons(model, 0),
+        ],
+    }
+}

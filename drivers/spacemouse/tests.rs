@@ -94,3 +94,27 @@ fn every_keyword_has_its_cpp_ids() {
     assert_eq!((sm.vendor, sm.product), (9583, 50735));
     assert!(model("vrpn_3DConnexion_Nope").is_none());
 }
+
+#[test]
+fn every_model_end_to_end() {
+    use crate::drivers::hid_e2e::{check, Entry};
+    let entries = MODELS
+        .iter()
+        .map(|m| Entry {
+            keyword: m.keyword,
+            vendor: m.vendor,
+            product: m.product,
+            interface: 0,
+            channels: 6,
+            buttons: m.buttons,
+            build: Box::new(
+                move |name: &str, conn: &crate::Connection, hub: &crate::hid::DeviceHub| {
+                    super::build(m, name, conn, hub)
+                },
+            ),
+            decoder: Decoder::new(m),
+            samples: sim::samples(m),
+        })
+        .collect();
+    check(entries);
+}

@@ -93,3 +93,36 @@ pub fn xk3(pedals: [bool; 3]) -> Vec<u8> {
     }
     r
 }
+
+/// A few reads exercising the keys, switch, shuttle, jog or joystick of `model`.
+pub fn samples(model: &super::Model) -> Vec<Vec<u8>> {
+    use super::Kind;
+    match model.kind {
+        Kind::Desktop => vec![desktop(true, 1 | 1 << 19), desktop(false, 1 << 7)],
+        Kind::Pro | Kind::Joystick | Kind::JogAndShuttle => {
+            let (a, b) = halves([0, 200, 60], true, 1 | 1 << 40);
+            let (c, d) = halves([(-7i8) as u8, 30, 255], false, 1 << 57);
+            vec![
+                a,
+                b,
+                c,
+                d,
+                whole([64, 64, 10], true, 1 << 3),
+                whole([64, 64, 14], true, 0),
+            ]
+        }
+        Kind::Joystick12 => vec![
+            twelve(true, 1 | 1 << 11, [127, 0x81, 100]),
+            twelve(false, 1 << 5, [0, 10, 98]),
+        ],
+        Kind::JogAndShuttle12 => vec![
+            twelve(true, 1, [2, (-3i8) as u8, 0]),
+            twelve(false, 1 << 11, [(-1i8) as u8, 7, 0]),
+        ],
+        Kind::JogAndShuttle68 => vec![
+            sixty_eight(false, 1 | 1 << 29 | 1 << 67, -2, 7),
+            sixty_eight(true, 1 << 44, 3, -7),
+        ],
+        Kind::Xk3 => vec![xk3([true, false, true]), xk3([false, true, false])],
+    }
+}

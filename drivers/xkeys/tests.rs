@@ -180,3 +180,68 @@ fn every_keyword_is_there() {
     assert_eq!(MODELS.len(), 8);
     assert_eq!(model("vrpn_Xkeys_Jog_And_Shuttle68").unwrap().buttons, 69);
 }
+
+#[test]
+fn every_model_end_to_end() {
+    use crate::drivers::hid_e2e::{check, Entry};
+    let entries = MODELS
+        .iter()
+        .map(|m| Entry {
+            keyword: m.keyword,
+            vendor: super::VENDOR,
+            product: m.product,
+            interface: 0,
+            channels: m.channels.unwrap_or(0),
+            buttons: m.buttons,
+            build: Box::new(
+                move |name: &str, conn: &crate::Connection, hub: &crate::hid::DeviceHub| {
+                    super::build(m, name, conn, hub)
+                },
+            ),
+            decoder: Decoder::new(m),
+            samples: sim::samples(m),
+        })
+        .collect();
+    check(entries);
+}
+
+/// The LEDs through the device: green once a client is connected, red when the last one
+/// leaves, off when the server stops — each an output report the simulator receives.
+#[test]
+fn leds_follow_the_clients() {
+    use crate::hid::rig::Rig;
+    use crate::hid::source::HostRequest;
+    let m = model("vrpn_Xkeys_Desktop").unwrap();
+    let mut rig = Rig::new();
+    rig.connect();
+    let dev = super::build(m, "Keys", &rig.server, &rig.hub).unwrap();
+    rig.devices.push(dev);
+    let l = rig.plug(3, super::VENDOR, m.product, 0, "X-keys");
+    let end = rig.accept(&l);
+    let mut leds = Vec::new();
+    let mut wait_for = |rig: &mut Rig, byte: u8| {
+        rig.until(&format!("LED report {byte:#x}"), |_| {
+            while let Ok(Some(r)) = end.try_request() {
+                match r {
+                    HostRequest::Output(b) => leds.push(b[8]),
+                    other => panic!("unexpected request {other:?}"),
+                }
+            }
+            leds.last() == Some(&byte)
+        });
+    };
+    wait_for(&mut rig, 0x40);
+    // The client leaves: red.
+    rig.client = crate::Connection::client_in(
+        &rig.reactor,
+        "127.0.0.1",
+        9,
+        false,
+        crate::Limits::default(),
+    )
+    .unwrap();
+    wait_for(&mut rig, 0x80);
+    // The server stops: both off.
+    rig.devices.clear();
+    wait_for(&mut rig, 0x00);
+}

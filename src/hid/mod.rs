@@ -21,6 +21,8 @@ pub mod evdev;
 pub mod fake;
 pub mod hotplug;
 pub mod ioctl;
+#[cfg(test)]
+pub(crate) mod rig;
 pub mod source;
 pub mod sysfs;
 pub mod uevent;

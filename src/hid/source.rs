@@ -241,10 +241,17 @@ impl DeviceEnd {
         Ok(())
     }
 
-    /// The next request from the host, if one is waiting (non-blocking).
+    /// The next request from the host, if one is waiting (non-blocking). The host having
+    /// closed the device is `UnexpectedEof`.
     pub fn try_request(&self) -> io::Result<Option<HostRequest>> {
         let mut buf = [0u8; 4096];
         match recv(self.data.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
+            Ok(0) => {
+                return Err(io::Error::new(
+                    io::ErrorKind::UnexpectedEof,
+                    "the host closed the device",
+                ))
+            }
             Ok(n) => return Ok(Some(HostRequest::Output(buf[..n].to_vec()))),
             Err(nix::errno::Errno::EAGAIN) => {}
             Err(e) => return Err(errno(e)),
