@@ -190,6 +190,11 @@ pub trait PadDecoder {
     /// The device opened: forget what the last one said (dial positions).
     fn opened(&mut self, _state: &mut PadState, _ops: &mut HidOps) {}
 
+    /// A text to send when the device opens (C++ greets some devices by what they are).
+    fn greeting(&self, _node: Option<&NodeInfo>) -> Option<String> {
+        None
+    }
+
     /// Whether any client is connected changed (C++ X-keys turn their LEDs green or red).
     fn clients(&mut self, _any: bool, _ops: &mut HidOps) {}
 
@@ -290,8 +295,14 @@ impl<T: PadDecoder> HidDriver for PadDriver<T> {
         self.wants.clone()
     }
 
-    fn opened(&mut self, now: Now, _nodes: &[Option<NodeInfo>], ops: &mut HidOps) {
+    fn opened(&mut self, now: Now, nodes: &[Option<NodeInfo>], ops: &mut HidOps) {
         self.open = true;
+        if let Some(text) = self
+            .decoder
+            .greeting(nodes.first().and_then(Option::as_ref))
+        {
+            self.pad.say(TextSeverity::Normal, format_args!("{text}"));
+        }
         self.last_now = Some(now.mono);
         self.decoder.opened(&mut self.pad.state, ops);
         let any = self.conn.connected_peers() > 0;

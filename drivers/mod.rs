@@ -5,10 +5,12 @@
 //! [`DeviceModel`]: crate::serial::testing::DeviceModel
 
 pub mod cerealbox;
+pub mod controls;
 pub mod dyna;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod glove5dt_usb;
 #[cfg(test)]
 mod hid_e2e;
 pub mod hid_pad;
