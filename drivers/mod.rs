@@ -14,6 +14,8 @@ pub mod glove5dt_usb;
 #[cfg(test)]
 mod hid_e2e;
 pub mod hid_pad;
+pub mod hid_quat;
+pub mod hmd;
 pub mod joylin;
 pub mod magellan;
 pub mod spacemouse;
