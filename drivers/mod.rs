@@ -15,6 +15,7 @@ pub mod glove5dt_usb;
 mod hid_e2e;
 pub mod hid_pad;
 pub mod hid_quat;
+pub mod hid_trackers;
 pub mod hmd;
 pub mod joylin;
 pub mod magellan;

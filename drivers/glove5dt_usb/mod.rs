@@ -105,6 +105,7 @@ impl Model {
                 mask: LEFT | FIVE,
             }],
             interface: InterfaceRule::Any,
+            nth: 0,
         }
     }
 }

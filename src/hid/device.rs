@@ -277,11 +277,17 @@ impl<D: HidDriver> HidDevice<D> {
                 NodeKind::Evdev => 1,
             };
             let list = lists[slot].get_or_insert_with(|| self.hub.enumerate(want.kind));
-            let found = list.iter().find(|n| {
-                want.accepts(n, &dev)
-                    && !self.hub.claimed(n.devnode())
-                    && !chosen.iter().any(|(_, p)| p == n.devnode())
-            });
+            let free = |n: &NodeInfo| {
+                !self.hub.claimed(n.devnode()) && !chosen.iter().any(|(_, p)| p == n.devnode())
+            };
+            let found = if want.nth > 0 {
+                list.iter()
+                    .filter(|n| want.accepts(n, &dev))
+                    .nth(want.nth)
+                    .filter(|n| free(n))
+            } else {
+                list.iter().find(|n| want.accepts(n, &dev) && free(n))
+            };
             match (found, want.path()) {
                 (Some(n), _) => chosen.push((Some(n.clone()), n.devnode().to_path_buf())),
                 // A configured file sysfs does not know (a pipe standing in for a node).

@@ -118,6 +118,8 @@ pub struct HidMatch {
     pub any_of: Vec<Select>,
     /// The interface number.
     pub interface: InterfaceRule,
+    /// Take the `nth` node that matches (0: the first that no other device holds).
+    pub nth: usize,
 }
 
 impl HidMatch {
@@ -131,6 +133,7 @@ impl HidMatch {
                 mask: 0xFFFF,
             }],
             interface: InterfaceRule::Any,
+            nth: 0,
         }
     }
 
@@ -140,6 +143,7 @@ impl HidMatch {
             kind: NodeKind::Evdev,
             any_of: vec![select],
             interface: InterfaceRule::Any,
+            nth: 0,
         }
     }
 
@@ -149,6 +153,7 @@ impl HidMatch {
             kind,
             any_of: vec![select],
             interface: InterfaceRule::Any,
+            nth: 0,
         }
     }
 
@@ -159,6 +164,13 @@ impl HidMatch {
             product,
             mask: 0xFFFF,
         });
+        self
+    }
+
+    /// The `n`th matching node (counting from 0), whether or not another device holds the
+    /// ones before it.
+    pub fn nth(mut self, n: usize) -> HidMatch {
+        self.nth = n;
         self
     }
 
@@ -450,6 +462,7 @@ mod tests {
                 mask: 0x0011,
             }],
             interface: InterfaceRule::Any,
+            nth: 0,
         };
         assert!(masked.accepts(&info(0x5d70, 0x0013, None), dev));
         assert!(!masked.accepts(&info(0x5d70, 0x0010, None), dev));

@@ -245,27 +245,28 @@ impl DeviceEnd {
     /// closed the device is `UnexpectedEof`.
     pub fn try_request(&self) -> io::Result<Option<HostRequest>> {
         let mut buf = [0u8; 4096];
-        match recv(self.data.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
-            Ok(0) => {
-                return Err(io::Error::new(
-                    io::ErrorKind::UnexpectedEof,
-                    "the host closed the device",
-                ))
+        // Feature requests first: a host that sends one and closes must not lose it behind
+        // the end of the data socket.
+        match recv(self.control.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
+            Ok(0) | Err(nix::errno::Errno::EAGAIN) => {}
+            Ok(n) => {
+                return Ok(match buf[0] {
+                    b'S' => Some(HostRequest::SetFeature(buf[1..n].to_vec())),
+                    b'G' if n >= 4 => Some(HostRequest::GetFeature {
+                        id: buf[1],
+                        len: u16::from_le_bytes([buf[2], buf[3]]),
+                    }),
+                    _ => None,
+                })
             }
-            Ok(n) => return Ok(Some(HostRequest::Output(buf[..n].to_vec()))),
-            Err(nix::errno::Errno::EAGAIN) => {}
             Err(e) => return Err(errno(e)),
         }
-        match recv(self.control.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
-            Ok(0) => Ok(None),
-            Ok(n) => Ok(match buf[0] {
-                b'S' => Some(HostRequest::SetFeature(buf[1..n].to_vec())),
-                b'G' if n >= 4 => Some(HostRequest::GetFeature {
-                    id: buf[1],
-                    len: u16::from_le_bytes([buf[2], buf[3]]),
-                }),
-                _ => None,
-            }),
+        match recv(self.data.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
+            Ok(0) => Err(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                "the host closed the device",
+            )),
+            Ok(n) => Ok(Some(HostRequest::Output(buf[..n].to_vec()))),
             Err(nix::errno::Errno::EAGAIN) => Ok(None),
             Err(e) => Err(errno(e)),
         }
@@ -357,13 +358,14 @@ mod tests {
         assert_eq!(host.read(&mut buf).unwrap(), 2);
         host.write_output(&[0, 0xb3, 7, 1]).unwrap();
         host.set_feature(&[0x11, 0, 0, 0x0b, 0x10, 0x27]).unwrap();
-        assert_eq!(
-            dev.try_request().unwrap(),
-            Some(HostRequest::Output(vec![0, 0xb3, 7, 1]))
-        );
+        // Feature requests come first (they travel on their own socket).
         assert_eq!(
             dev.try_request().unwrap(),
             Some(HostRequest::SetFeature(vec![0x11, 0, 0, 0x0b, 0x10, 0x27]))
+        );
+        assert_eq!(
+            dev.try_request().unwrap(),
+            Some(HostRequest::Output(vec![0, 0xb3, 7, 1]))
         );
         assert_eq!(dev.try_request().unwrap(), None);
         drop(dev);
