@@ -7,6 +7,7 @@
 pub mod cerealbox;
 pub mod controls;
 pub mod dyna;
+pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
