@@ -9,6 +9,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use vrpn::devices::base::set_print_threshold;
+use vrpn::driver::DeviceStatus;
 use vrpn::server::config::{self, DeviceEntry};
 use vrpn::server::options::USAGE;
 use vrpn::server::{build_devices, parse_args, BuildNote, ServerCommand, ServerLoop};
@@ -75,14 +76,33 @@ fn main() -> ExitCode {
             }
         }
     }
-    let verbose = opts.verbose;
-    let devices = build_devices(&entries, &conn, opts.warn_only, |note| match note {
-        BuildNote::Opened { entry, name } if verbose => {
-            outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
+    if let Some(dir) = &opts.log_dir {
+        match vrpn::log::LogFolder::new(dir) {
+            Ok(folder) => conn.set_remote_log_folder(Some(folder)),
+            Err(e) => {
+                errln!("{PROGRAM}: -logdir {e}");
+                return ExitCode::from(1);
+            }
         }
-        BuildNote::Opened { .. } => {}
-        BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+    }
+    let verbose = opts.verbose;
+    // A device's port problems (cannot open it, lost it) and recoveries, once per change.
+    let status: vrpn::driver::StatusSink = std::rc::Rc::new(|name: &str, status: &DeviceStatus| {
+        errln!("{PROGRAM}: {name}: {status}");
     });
+    let devices = build_devices(
+        &entries,
+        &conn,
+        opts.warn_only,
+        Some(status),
+        |note| match note {
+            BuildNote::Opened { entry, name } if verbose => {
+                outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
+            }
+            BuildNote::Opened { .. } => {}
+            BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+        },
+    );
     let devices = match devices {
         Ok(d) => d,
         Err(e) => {
@@ -105,11 +125,13 @@ fn main() -> ExitCode {
     let nic = opts
         .nic
         .map_or("all interfaces".to_string(), |n| n.to_string());
-    outln!(
-        "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
-        devices.len(),
-        opts.config
-    );
+    if !opts.quiet {
+        outln!(
+            "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
+            devices.len(),
+            opts.config
+        );
+    }
     let mut server = ServerLoop::new(conn, devices, opts.sleep);
     server.quit_after_last(opts.quit_after_last);
     server.flush_logs_every_pass(opts.flush_logs);

@@ -15,9 +15,9 @@ use std::cell::Cell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use super::stack_text::with_text;
 use crate::connection::ConnectionEvent;
 use crate::devices::text::TextSeverity;
+use crate::driver::text::with_text;
 use crate::hid::{HidDriver, HidMatch, HidOps, NodeInfo};
 use crate::time::{Now, TimeVal};
 use crate::{AnalogServer, ButtonServer, Connection, DialServer, Error};

@@ -71,9 +71,11 @@
 // feature.
 #[cfg(any(feature = "capi", test))]
 pub mod capi;
+pub mod config;
 pub mod connection;
 pub mod devices;
 pub use connection::dispatch;
+pub mod driver;
 #[path = "../drivers/mod.rs"]
 pub mod drivers;
 mod error;
@@ -92,6 +94,9 @@ pub mod proto;
 mod python;
 pub mod serial;
 pub mod server;
+// Device simulators and their rigs: test tools, never in the default library.
+#[cfg(any(test, feature = "sim"))]
+pub mod sim;
 pub mod time;
 pub mod wire;
 
@@ -100,6 +105,7 @@ pub use connection::{
     Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
+pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};
 pub use devices::builder::RemoteBuilder;
 pub use devices::button::{
     ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonState, ButtonStates,
@@ -130,3 +136,7 @@ struct ReadmeDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/USING.md")]
 struct UsingDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/IMAGER.md")]
+struct ImagerDoctests;

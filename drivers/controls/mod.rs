@@ -27,9 +27,13 @@
 //!   and PowerMate state every 1/30 s; the PowerMate's Dial there repeats a zero turn every
 //!   1/30 s between real ones, which is not reproduced).
 
+pub mod config;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::drivers::hid_pad::{normalize_byte_axis, Pad, PadDecoder, PadDriver, PadState, Skip};

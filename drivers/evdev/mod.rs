@@ -46,9 +46,13 @@
 //! * `vrpn_Event_Mouse` reads while no client is connected (C++ lets events queue) and
 //!   ignores an unknown button instead of dropping the rest of the read.
 
+pub mod config;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::hid::evdev::{
@@ -173,11 +177,9 @@ impl EvdevDriver {
                         }
                     }
                     // C++ takes relative motion on any kind's channels (a keyboard has none).
-                    EV_REL => {
-                        if usize::from(ev.code) < self.analog.num_channels() {
-                            self.analog.set_channel(ev.code.into(), f64::from(ev.value));
-                            force = true;
-                        }
+                    EV_REL if usize::from(ev.code) < self.analog.num_channels() => {
+                        self.analog.set_channel(ev.code.into(), f64::from(ev.value));
+                        force = true;
                     }
                     EV_ABS => {
                         if let DevInputKind::Absolute(range) = kind {

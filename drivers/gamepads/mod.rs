@@ -40,10 +40,14 @@
 //! * Reports of unknown length or type are counted and reported as text warnings (at most
 //!   one a second) instead of lines on the server's standard error.
 
+pub mod config;
 pub mod decode;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::drivers::hid_pad::{Pad, PadDecoder, PadDriver, PadState, Skip};

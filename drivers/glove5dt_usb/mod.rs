@@ -29,9 +29,13 @@
 //! * One Analog report per glove report (C++ sends one after setting each channel, so a
 //!   client sees up to 14 intermediate states).
 
+pub mod config;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::drivers::hid_pad::{be_i16, Pad, PadDecoder, PadDriver, PadState, Skip};

@@ -29,9 +29,9 @@
 
 use std::time::{Duration, Instant};
 
+use crate::driver::text::with_text;
 use crate::drivers::hid_pad::le_i16;
 use crate::drivers::hid_quat::{invert, magnitude, mult, normalize, Quat, Vec3};
-use crate::drivers::stack_text::with_text;
 use crate::hid::{HidDriver, HidMatch, HidOps, InterfaceRule, NodeInfo};
 use crate::time::Now;
 use crate::{AnalogServer, ButtonServer, Connection, Error, TextSeverity, TrackerServer};

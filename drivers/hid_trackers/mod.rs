@@ -34,16 +34,20 @@
 //! * The WinTracker's settings are VRPN text messages instead of lines on the server's
 //!   standard output.
 
+pub mod config;
 pub mod hydra;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
 
+pub use self::config::DRIVER;
+
 use std::time::Instant;
 
 use crate::devices::ServerDevice;
+use crate::driver::text::with_text;
 use crate::drivers::hid_pad::{le_i16, le_u16};
-use crate::drivers::stack_text::with_text;
 use crate::hid::{DeviceHub, HidDevice, HidDriver, HidMatch, HidOps, InterfaceRule, NodeInfo};
 use crate::time::Now;
 use crate::{ButtonServer, Connection, Error, TextSeverity, TrackerServer};

@@ -9,8 +9,8 @@ use super::hydra::{gamepad_mode_report, motion_mode_report, Wands};
 use super::sim::{self, WandRaw};
 use super::{decode_spacepoint, decode_wintracker, wintracker_commands, SPACEPOINT, WINTRACKER};
 use crate::drivers::hid_quat::normalize;
+use crate::hid::fake::HostRequest;
 use crate::hid::rig::Rig;
-use crate::hid::source::HostRequest;
 use crate::{TrackerPose, TrackerRemote};
 
 #[test]
@@ -85,8 +85,9 @@ fn hydra_decodes_and_calibrates_as_cpp() {
         ..WandRaw::default()
     };
     let u = w2.decode(1, &sim::hydra([WandRaw::default(), up])[30..]);
-    // mirror −1: (−0.03, −0.04, −0); right wand wants x > 0: sign −1 → x = 0.03 × …
-    assert_eq!(u.pos, [0.03 * -1.0 * -1.0, -0.04, -0.0]);
+    // Mirror −1 (y > 0); the right wand wants x > 0 after mirroring, −0.03 is not: sign −1;
+    // then x × sign × mirror = 0.03, y × mirror = −0.04.
+    assert_eq!(u.pos, [0.03, -0.04, 0.0]);
 }
 
 #[test]

@@ -16,9 +16,9 @@
 use std::time::Instant;
 
 use crate::devices::ServerDevice;
+use crate::driver::text::with_text;
 use crate::drivers::hid_pad::le_i16;
 use crate::drivers::hid_quat::{exp, invert, mult, normalize, Quat};
-use crate::drivers::stack_text::with_text;
 use crate::hid::{DeviceHub, HidDevice, HidDriver, HidMatch, HidOps, NodeInfo};
 use crate::time::Now;
 use crate::{AnalogServer, Connection, Error, TextSeverity, TrackerServer};

@@ -34,18 +34,22 @@
 //! * The first keep-alive goes out when the device opens (C++ waits 9 s, so a unit that is
 //!   not already streaming stays silent that long).
 
+pub mod config;
 pub mod hdk;
 pub mod imu;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use std::time::Instant;
 
 use self::imu::Imu;
 use crate::devices::ServerDevice;
+use crate::driver::text::with_text;
 use crate::drivers::hid_pad::Skip;
-use crate::drivers::stack_text::with_text;
 use crate::hid::{DeviceHub, HidDevice, HidDriver, HidMatch, HidOps, NodeInfo};
 use crate::time::Now;
 use crate::{AnalogServer, Connection, Error, TextSeverity};

@@ -7,8 +7,8 @@ use std::rc::Rc;
 use super::imu::{self, unpack_vector, Imu};
 use super::{hdk, model, sim, MODELS};
 use crate::drivers::hid_pad::Skip;
+use crate::hid::fake::HostRequest;
 use crate::hid::rig::Rig;
-use crate::hid::source::HostRequest;
 
 #[test]
 fn vectors_unpack_21_bit_values() {

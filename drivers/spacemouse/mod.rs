@@ -39,9 +39,13 @@
 //! * One hidraw report is one VRPN report (C++ cuts reads into 7-byte pieces and reports
 //!   after each).
 
+pub mod config;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::hid::driver::HidOps;

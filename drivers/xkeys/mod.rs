@@ -40,9 +40,13 @@
 //! * A report of unexpected length or failing its check is counted and reported as a text
 //!   warning (at most one a second), not printed on the server's standard error.
 
+pub mod config;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 #[cfg(test)]
 mod tests;
+
+pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
 use crate::hid::driver::HidOps;

@@ -209,8 +209,8 @@ fn every_model_end_to_end() {
 /// leaves, off when the server stops — each an output report the simulator receives.
 #[test]
 fn leds_follow_the_clients() {
+    use crate::hid::fake::HostRequest;
     use crate::hid::rig::Rig;
-    use crate::hid::source::HostRequest;
     let m = model("vrpn_Xkeys_Desktop").unwrap();
     let mut rig = Rig::new();
     rig.connect();

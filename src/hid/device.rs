@@ -20,6 +20,8 @@ use crate::devices::base;
 use crate::devices::text::TextSeverity;
 use crate::devices::ServerDevice;
 use crate::dispatch::SenderId;
+use crate::driver::registry::BuildContext;
+use crate::driver::status::{DeviceStatus, OpenFailure, StatusSink};
 use crate::net::Reactor;
 use crate::time::Now;
 
@@ -179,6 +181,19 @@ pub struct HidDevice<D: HidDriver> {
     reports: u64,
     ops: HidOps,
     buf: Box<[u8; MAX_REPORT]>,
+    status: Option<StatusSink>,
+    /// The last pass's time (for the shutdown's feature answers).
+    last_now: Option<Now>,
+}
+
+/// `driver` as a running device of the server `cx` builds for: its nodes found through the
+/// context's device hub, its state changes told to the program.
+pub fn serve<D: HidDriver + 'static>(driver: D, cx: &BuildContext<'_>) -> Box<dyn ServerDevice> {
+    let mut device = HidDevice::new(driver, cx.hub(), cx.conn());
+    if let Some(sink) = cx.status() {
+        device.report_status_to(sink.clone());
+    }
+    Box::new(device)
 }
 
 impl<D: HidDriver> HidDevice<D> {
@@ -210,6 +225,19 @@ impl<D: HidDriver> HidDevice<D> {
             reports: 0,
             ops: HidOps::new(),
             buf: Box::new([0; MAX_REPORT]),
+            status: None,
+            last_now: None,
+        }
+    }
+
+    /// Also tells `sink` when the device is waited for, opened, cannot be opened or lost.
+    pub fn report_status_to(&mut self, sink: StatusSink) {
+        self.status = Some(sink);
+    }
+
+    fn tell(&self, status: DeviceStatus) {
+        if let Some(sink) = &self.status {
+            sink(&self.name, &status);
         }
     }
 
@@ -337,6 +365,9 @@ impl<D: HidDriver> HidDevice<D> {
                     self.describe()
                 );
                 self.text(TextSeverity::Warning, &text);
+                self.tell(DeviceStatus::Waiting {
+                    device: self.describe(),
+                });
             }
             if self.hub.generation().is_none() {
                 self.look_at = Some(now.mono + RESCAN_WITHOUT_WATCHER);
@@ -351,7 +382,13 @@ impl<D: HidDriver> HidDevice<D> {
                     for n in opened.drain(..) {
                         self.forget(n);
                     }
-                    let early = self.appeared.is_none_or(|t| now.mono < t + EARLY_WINDOW);
+                    if self.last_problem.is_none() {
+                        self.tell(DeviceStatus::CannotOpen {
+                            port: path.display().to_string(),
+                            reason: OpenFailure::from_io(&e),
+                        });
+                    }
+                    let early = self.appeared.map_or(true, |t| now.mono < t + EARLY_WINDOW);
                     let retry = if early { EARLY_RETRY } else { LATE_RETRY };
                     self.look_at = Some(now.mono + retry);
                     self.problem(
@@ -390,6 +427,7 @@ impl<D: HidDriver> HidDevice<D> {
             format!("{} opened {what}", self.name)
         };
         self.text(TextSeverity::Normal, &text);
+        self.tell(DeviceStatus::Opened { port: what });
         self.said_waiting = false;
         self.was_lost = false;
         self.last_problem = None;
@@ -418,9 +456,13 @@ impl<D: HidDriver> HidDevice<D> {
         let text = format!(
             "{} unplugged ({}: {why}); waiting for it to come back",
             self.name,
-            path.unwrap_or_default()
+            path.as_deref().unwrap_or_default()
         );
         self.text(TextSeverity::Error, &text);
+        self.tell(DeviceStatus::Lost {
+            port: path.unwrap_or_default(),
+            reason: why.to_string(),
+        });
         self.last_problem = None;
         if self.hub.generation().is_none() {
             self.look_at = Some(now.mono + RESCAN_WITHOUT_WATCHER);
@@ -590,8 +632,9 @@ impl<D: HidDriver> Drop for HidDevice<D> {
         }
         let mut ops = self.ops.take();
         self.driver.shutdown(&mut ops);
-        let now = crate::net::clock();
-        self.carry_out(now, ops);
+        if let Some(now) = self.last_now {
+            self.carry_out(now, ops);
+        }
         for n in std::mem::take(&mut self.nodes) {
             self.forget(n);
         }
@@ -604,6 +647,7 @@ impl<D: HidDriver> ServerDevice for HidDevice<D> {
     }
 
     fn mainloop(&mut self, now: Now) {
+        self.last_now = Some(now);
         let generation = self.hub.generation();
         let changed = generation.is_some() && generation != self.seen;
         if changed {

@@ -200,7 +200,7 @@ impl HidMatch {
         let iface_ok = match self.interface {
             InterfaceRule::Any => true,
             InterfaceRule::Is(i) => interface == Some(i),
-            InterfaceRule::IsOrUnknown(i) => interface.is_none_or(|n| n == i || n < 0),
+            InterfaceRule::IsOrUnknown(i) => interface.map_or(true, |n| n == i || n < 0),
         };
         let (v, pid) = info.ids();
         kind_ok

@@ -18,6 +18,7 @@
 pub mod device;
 pub mod driver;
 pub mod evdev;
+#[cfg(any(test, feature = "sim"))]
 pub mod fake;
 pub mod hotplug;
 pub mod ioctl;
@@ -27,6 +28,6 @@ pub mod source;
 pub mod sysfs;
 pub mod uevent;
 
-pub use device::{DeviceHub, HidDevice};
+pub use device::{serve, DeviceHub, HidDevice};
 pub use driver::{HidDriver, HidMatch, HidOp, HidOps, InterfaceRule, NodeInfo, NodeKind, Select};
 pub use sysfs::DeviceTree;

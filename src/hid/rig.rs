@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use super::fake::FakeTree;
-use super::source::{DeviceEnd, NodeListener};
+use super::fake::{DeviceEnd, NodeListener};
 use super::DeviceHub;
 use crate::devices::ServerDevice;
 use crate::net::Reactor;

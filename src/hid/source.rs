@@ -3,7 +3,8 @@
 //! A hidraw node hands over exactly one report per `read` (with the report id first when the
 //! device numbers its reports), takes an output report per `write`, and feature reports
 //! through ioctls. The stand-in is a pair of `SOCK_SEQPACKET` Unix sockets, which keep message
-//! boundaries the same way, so a device simulator can sit behind a fake device tree:
+//! boundaries the same way, so a device simulator can sit behind a fake device tree
+//! (its side is [`super::fake::DeviceEnd`], with the `sim` feature):
 //!
 //! - the *data* socket carries input reports from the device (one datagram per report, the
 //!   bytes hidraw would return) and output reports to it (one datagram per `write`);
@@ -171,7 +172,8 @@ impl ReportSource {
     }
 }
 
-fn wait_readable(fd: RawFd, timeout: Duration) -> io::Result<()> {
+/// Waits until `fd` is readable, at most `timeout`.
+pub(crate) fn wait_readable(fd: RawFd, timeout: Duration) -> io::Result<()> {
     use nix::poll::{poll, PollFd, PollFlags};
     let mut fds = [PollFd::new(fd, PollFlags::POLLIN)];
     let ms = timeout.as_millis().min(i32::MAX as u128) as i32;
@@ -184,164 +186,10 @@ fn wait_readable(fd: RawFd, timeout: Duration) -> io::Result<()> {
     }
 }
 
-/// The device half of a stand-in: what a simulator holds. Made by a listener at the node's
-/// path ([`DeviceEnd::accept`]) or from `socketpair`s.
-#[derive(Debug)]
-pub struct DeviceEnd {
-    /// Input reports go out here; output reports come in.
-    pub data: OwnedFd,
-    /// Feature requests come in here.
-    pub control: OwnedFd,
-}
-
-/// One request the host made of a simulated device.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum HostRequest {
-    /// An output report.
-    Output(Vec<u8>),
-    /// A feature report to set.
-    SetFeature(Vec<u8>),
-    /// A feature report asked for: its id and the most bytes wanted.
-    GetFeature {
-        /// Report id.
-        id: u8,
-        /// Buffer length.
-        len: u16,
-    },
-}
-
-impl DeviceEnd {
-    /// A connected pair: the host's [`ReportSource`] and the simulator's end.
-    pub fn pair() -> io::Result<(ReportSource, DeviceEnd)> {
-        use nix::sys::socket::socketpair;
-        let pair = || -> io::Result<(OwnedFd, OwnedFd)> {
-            let (a, b) = socketpair(
-                AddressFamily::Unix,
-                SockType::SeqPacket,
-                None,
-                SockFlag::SOCK_CLOEXEC,
-            )
-            .map_err(errno)?;
-            Ok((ioctl::own_fd(a), ioctl::own_fd(b)))
-        };
-        let (host_data, dev_data) = pair()?;
-        let (host_control, dev_control) = pair()?;
-        Ok((
-            ReportSource::from_sockets(host_data, host_control)?,
-            DeviceEnd {
-                data: dev_data,
-                control: dev_control,
-            },
-        ))
-    }
-
-    /// Sends one input report.
-    pub fn send_report(&self, report: &[u8]) -> io::Result<()> {
-        send(self.data.as_raw_fd(), report, MsgFlags::MSG_NOSIGNAL).map_err(errno)?;
-        Ok(())
-    }
-
-    /// The next request from the host, if one is waiting (non-blocking). The host having
-    /// closed the device is `UnexpectedEof`.
-    pub fn try_request(&self) -> io::Result<Option<HostRequest>> {
-        let mut buf = [0u8; 4096];
-        // Feature requests first: a host that sends one and closes must not lose it behind
-        // the end of the data socket.
-        match recv(self.control.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
-            Ok(0) | Err(nix::errno::Errno::EAGAIN) => {}
-            Ok(n) => {
-                return Ok(match buf[0] {
-                    b'S' => Some(HostRequest::SetFeature(buf[1..n].to_vec())),
-                    b'G' if n >= 4 => Some(HostRequest::GetFeature {
-                        id: buf[1],
-                        len: u16::from_le_bytes([buf[2], buf[3]]),
-                    }),
-                    _ => None,
-                })
-            }
-            Err(e) => return Err(errno(e)),
-        }
-        match recv(self.data.as_raw_fd(), &mut buf, MsgFlags::MSG_DONTWAIT) {
-            Ok(0) => Err(io::Error::new(
-                io::ErrorKind::UnexpectedEof,
-                "the host closed the device",
-            )),
-            Ok(n) => Ok(Some(HostRequest::Output(buf[..n].to_vec()))),
-            Err(nix::errno::Errno::EAGAIN) => Ok(None),
-            Err(e) => Err(errno(e)),
-        }
-    }
-
-    /// Answers a get-feature request.
-    pub fn answer_feature(&self, report: &[u8]) -> io::Result<()> {
-        send(self.control.as_raw_fd(), report, MsgFlags::MSG_NOSIGNAL).map_err(errno)?;
-        Ok(())
-    }
-}
-
-/// A simulator's listening socket at a device node's path.
-#[derive(Debug)]
-pub struct NodeListener {
-    fd: OwnedFd,
-    path: std::path::PathBuf,
-}
-
-impl NodeListener {
-    /// Listens at `path` (replacing a stale socket file).
-    pub fn bind(path: &Path) -> io::Result<NodeListener> {
-        use nix::sys::socket::{bind, listen};
-        let _ = std::fs::remove_file(path);
-        let fd = socket(
-            AddressFamily::Unix,
-            SockType::SeqPacket,
-            SockFlag::SOCK_CLOEXEC | SockFlag::SOCK_NONBLOCK,
-            None,
-        )
-        .map_err(errno)?;
-        let fd = ioctl::own_fd(fd);
-        bind(fd.as_raw_fd(), &UnixAddr::new(path).map_err(errno)?).map_err(errno)?;
-        listen(fd.as_raw_fd(), 4).map_err(errno)?;
-        Ok(NodeListener {
-            fd,
-            path: path.to_path_buf(),
-        })
-    }
-
-    /// The host connected (both sockets): its device end, or `None` if it has not yet.
-    pub fn accept(&self) -> io::Result<Option<DeviceEnd>> {
-        use nix::sys::socket::accept;
-        let take = |fd: RawFd| -> io::Result<Option<OwnedFd>> {
-            match accept(fd) {
-                Ok(c) => Ok(Some(ioctl::own_fd(c))),
-                Err(nix::errno::Errno::EAGAIN) => Ok(None),
-                Err(e) => Err(errno(e)),
-            }
-        };
-        let Some(data) = take(self.fd.as_raw_fd())? else {
-            return Ok(None);
-        };
-        // The host connects its control socket right after the data socket.
-        wait_readable(self.fd.as_raw_fd(), FEATURE_TIMEOUT)?;
-        let control = take(self.fd.as_raw_fd())?
-            .ok_or_else(|| io::Error::new(io::ErrorKind::TimedOut, "no control connection"))?;
-        Ok(Some(DeviceEnd { data, control }))
-    }
-
-    /// The listening descriptor (readable when the host connects).
-    pub fn raw_fd(&self) -> RawFd {
-        self.fd.as_raw_fd()
-    }
-}
-
-impl Drop for NodeListener {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::hid::fake::{DeviceEnd, HostRequest, NodeListener};
 
     #[test]
     fn one_report_per_read_and_requests_reach_the_device() {
