@@ -82,6 +82,16 @@ impl Pad {
         })
     }
 
+    /// Sets the channel and button counts (a device that learns them from its descriptor).
+    pub fn resize(&mut self, channels: usize, buttons: usize) {
+        if let Some(a) = &mut self.analog {
+            a.set_num_channels(channels.min(MAX_CHANNELS));
+        }
+        if let Some(b) = &self.buttons {
+            b.set_num_buttons(buttons.min(MAX_BUTTONS));
+        }
+    }
+
     /// The Analog.
     pub fn analog(&self) -> Option<&AnalogServer> {
         self.analog.as_ref()

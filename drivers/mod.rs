@@ -22,6 +22,7 @@ pub mod glove5dt_usb;
 mod hid_config_tests;
 #[cfg(test)]
 mod hid_e2e;
+pub mod hid_generic;
 pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
@@ -60,4 +61,5 @@ pub static REGISTRY: &[&Driver] = &[
     &hmd::DRIVER,
     &hid_trackers::DRIVER,
     &evdev::DRIVER,
+    &hid_generic::DRIVER,
 ];

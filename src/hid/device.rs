@@ -432,6 +432,31 @@ impl<D: HidDriver> HidDevice<D> {
         self.was_lost = false;
         self.last_problem = None;
         let infos: Vec<Option<NodeInfo>> = self.nodes.iter().map(|n| n.info.clone()).collect();
+        if self.driver.wants_descriptor() {
+            for (i, n) in self.nodes.iter().enumerate() {
+                // sysfs first (it also works for simulated nodes), then the ioctl.
+                let from_sysfs = n
+                    .info
+                    .as_ref()
+                    .and_then(NodeInfo::hid)
+                    .map(|h| h.report_descriptor())
+                    .filter(|r| r.as_ref().is_ok_and(|d| !d.is_empty()));
+                let d = match (from_sysfs, &n.source) {
+                    (Some(r), _) => r,
+                    (None, Source::Report(s)) => s.report_descriptor(),
+                    (None, Source::Events(_)) => Err(io::Error::new(
+                        io::ErrorKind::Unsupported,
+                        "an input event node has no report descriptor",
+                    )),
+                };
+                match &d {
+                    Ok(bytes) => self.driver.descriptor(i, Ok(bytes)),
+                    Err(e) => self
+                        .driver
+                        .descriptor(i, Err(io::Error::new(e.kind(), e.to_string()))),
+                }
+            }
+        }
         let mut ops = self.ops.take();
         self.driver.opened(now, &infos, &mut ops);
         self.carry_out(now, ops);

@@ -390,6 +390,16 @@ pub trait HidDriver {
     /// Razer Hydra needs its data and its control interface).
     fn interfaces(&self) -> Vec<HidMatch>;
 
+    /// Whether [`descriptor`](Self::descriptor) is wanted (a driver that reads the device's
+    /// report descriptor to learn its layout).
+    fn wants_descriptor(&self) -> bool {
+        false
+    }
+
+    /// Interface `interface`'s report descriptor, from sysfs or `HIDIOCGRDESC`, before
+    /// [`opened`](Self::opened) (only when [`wants_descriptor`](Self::wants_descriptor)).
+    fn descriptor(&mut self, _interface: usize, _descriptor: std::io::Result<&[u8]>) {}
+
     /// Every interface is open (`nodes[i]` is the one found for `interfaces()[i]`; a node
     /// opened by a configured path that sysfs does not describe has `None`).
     fn opened(&mut self, now: Now, nodes: &[Option<NodeInfo>], ops: &mut HidOps);

@@ -15,6 +15,7 @@
 //! Tests here cannot create kernel devices (no `/dev/uhid` or `/dev/uinput`): everything above
 //! the open call is exercised on simulators; the hidraw and evdev open path itself is not.
 
+pub mod descriptor;
 pub mod device;
 pub mod driver;
 pub mod evdev;
