@@ -32,6 +32,20 @@ pub mod magellan;
 pub mod spacemouse;
 pub mod xkeys;
 
+/// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
+/// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
+pub static SUGGESTERS: &[fn(&crate::hid::NodeInfo) -> Option<String>] = &[
+    spacemouse::suggest,
+    xkeys::suggest,
+    gamepads::suggest,
+    controls::suggest,
+    glove5dt_usb::suggest,
+    hmd::suggest,
+    hid_trackers::suggest,
+    hid_generic::suggest,
+    evdev::suggest,
+];
+
 /// Every device kind the server knows, by its `vrpn.cfg` keywords. The server finds an
 /// entry's parser here; a keyword no entry serves is an error naming it.
 pub static REGISTRY: &[&Driver] = &[

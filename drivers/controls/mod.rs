@@ -228,3 +228,12 @@ pub fn build(
         conn,
     )))
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is one of these devices.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    let m = MODELS
+        .iter()
+        .find(|m| (m.vendor, m.product) == (h.vendor, h.product))?;
+    Some(format!("{} Control0", m.keyword))
+}

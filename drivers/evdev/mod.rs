@@ -282,3 +282,22 @@ impl HidDriver for EvdevDriver {
 pub fn build(driver: EvdevDriver, conn: &Connection, hub: &DeviceHub) -> Box<dyn ServerDevice> {
     Box::new(HidDevice::new(driver, hub, conn))
 }
+
+/// The `vrpn_DevInput` line that would serve `node`, by what its capabilities say it is.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    use crate::hid::evdev::{BTN_GAMEPAD, BTN_JOYSTICK};
+    let i = node.input()?;
+    let name = &i.name;
+    if i.ev.has(EV_REL.into()) && i.rel.has(REL_X.into()) && i.key.has(BTN_LEFT.into()) {
+        return Some(format!("vrpn_DevInput Mouse0 \"{name}\" relative"));
+    }
+    if i.ev.has(EV_ABS.into()) && (i.key.has(BTN_JOYSTICK.into()) || i.key.has(BTN_GAMEPAD.into()))
+    {
+        return Some(format!("vrpn_DevInput Joystick0 \"{name}\" absolute 32767"));
+    }
+    // A keyboard: the letter keys (KEY_Q 16 … KEY_P 25).
+    if i.ev.has(EV_KEY.into()) && (16..=25).all(|k| i.key.has(k)) {
+        return Some(format!("vrpn_DevInput Keyboard0 \"{name}\" keyboard 255"));
+    }
+    None
+}

@@ -323,3 +323,12 @@ pub fn parse_hex_id(s: &str) -> Option<u16> {
         .unwrap_or(s);
     u16::from_str_radix(digits, 16).ok()
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is one of these controllers.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    let m = MODELS
+        .iter()
+        .find(|m| (m.vendor, m.product) == (h.vendor, h.product))?;
+    Some(format!("{} Gamepad0", m.keyword))
+}

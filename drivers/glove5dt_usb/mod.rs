@@ -193,3 +193,12 @@ pub fn build(
         conn,
     )))
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is a 5DT glove.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    let m = MODELS
+        .iter()
+        .find(|m| h.vendor == VENDOR && h.product & (LEFT | FIVE) == m.product_bits())?;
+    Some(format!("{} Glove0", m.keyword))
+}

@@ -272,3 +272,23 @@ impl HidDriver for GenericDriver {
         }
     }
 }
+
+/// The `vrpn_HID_Generic` line that would serve `node`, if its descriptor describes a
+/// joystick, game pad or multi-axis controller with something to serve.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    let d = descriptor::parse(&h.report_descriptor().ok()?).ok()?;
+    let wanted = d
+        .applications
+        .iter()
+        .any(|(p, u)| *p == page::GENERIC_DESKTOP && matches!(*u, 0x04 | 0x05 | 0x08));
+    let l = Layout::new(&d);
+    if !wanted || l.channels() + l.button_count() == 0 {
+        return None;
+    }
+    let iface = h.interface.map(|i| format!(" {i}")).unwrap_or_default();
+    Some(format!(
+        "vrpn_HID_Generic Device0 {:04x}:{:04x}{iface}",
+        h.vendor, h.product
+    ))
+}

@@ -277,3 +277,19 @@ pub fn build_wintracker(
         conn,
     )))
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is one of these trackers (a Hydra is
+/// named once, at its data interface).
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    match (h.vendor, h.product) {
+        SPACEPOINT if h.interface.map_or(true, |i| i == 1 || i < 0) => {
+            Some("vrpn_Tracker_SpacePoint SpacePoint0 0".to_string())
+        }
+        hydra::IDS if h.interface == Some(0) => {
+            Some("vrpn_Tracker_RazerHydra Tracker0".to_string())
+        }
+        WINTRACKER => Some("vrpn_Tracker_Wintracker Wintracker0 1 1 1 0 Z".to_string()),
+        _ => None,
+    }
+}

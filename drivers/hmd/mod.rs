@@ -263,3 +263,15 @@ pub fn build(
         conn,
     )))
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is one of these displays.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    if hdk::IDS.contains(&(h.vendor, h.product)) {
+        return Some(format!("{} Tracker0", hdk::KEYWORD));
+    }
+    let m = MODELS
+        .iter()
+        .find(|m| (m.vendor, m.product) == (h.vendor, h.product))?;
+    Some(format!("{} Hmd0", m.keyword))
+}

@@ -240,3 +240,12 @@ pub fn build(
         conn,
     )))
 }
+
+/// The vrpn.cfg line that would serve `node`, if it is one of these models.
+pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
+    let h = node.hid()?;
+    let m = MODELS
+        .iter()
+        .find(|m| (m.vendor, m.product) == (h.vendor, h.product))?;
+    Some(format!("{} SpaceMouse0", m.keyword))
+}

@@ -198,15 +198,11 @@ pub fn serve<D: HidDriver + 'static>(driver: D, cx: &BuildContext<'_>) -> Box<dy
 
 impl<D: HidDriver> HidDevice<D> {
     /// Runs `driver` on the nodes it asks for, found through `hub`, reporting problems as
-    /// texts from the driver's device on `conn` (and through the server's default printer).
+    /// texts from the driver's device on `conn` (and to the program, with
+    /// [`report_status_to`](Self::report_status_to)).
     pub fn new(driver: D, hub: &DeviceHub, conn: &Connection) -> HidDevice<D> {
         let name = driver.name().to_string();
         let sender = base::register_sender(conn, &name).ok();
-        if let Some(s) = sender {
-            if let Ok(ids) = base::register_base_types(conn, s) {
-                base::attach_default_printer(conn, &ids);
-            }
-        }
         HidDevice {
             wants: driver.interfaces(),
             driver,

@@ -23,6 +23,7 @@ pub mod evdev;
 pub mod fake;
 pub mod hotplug;
 pub mod ioctl;
+pub mod list;
 #[cfg(test)]
 pub(crate) mod rig;
 pub mod source;
