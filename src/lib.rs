@@ -55,6 +55,8 @@
 //! - [`connection`]: the public [`Connection`]: names, handlers, `mainloop()`.
 //! - [`devices`], [`layered`], [`serial`], [`drivers`]: tracker and the other device types,
 //!   the layered trackers, the serial layer and the hardware drivers.
+//! - [`forward`]: forwarders between connections, remote-controlled forwarding and the relay
+//!   that re-serves devices of servers clients cannot reach.
 //! - [`server`]: `vrpn.cfg` and the `vrpn_server` loop.
 //!
 //! # Printing
@@ -79,6 +81,7 @@ pub mod driver;
 #[path = "../drivers/mod.rs"]
 pub mod drivers;
 mod error;
+pub mod forward;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod layered;
@@ -139,6 +142,10 @@ struct UsingDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/IMAGER.md")]
 struct ImagerDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/LOGGING_REQUESTS.md")]
+struct LoggingRequestsDoctests;
 
 #[cfg(doctest)]
 #[doc = include_str!("../docs/MUTEX.md")]
