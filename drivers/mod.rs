@@ -27,6 +27,7 @@ pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
+pub mod imager_stream_buffer;
 pub mod joylin;
 pub mod magellan;
 pub mod spacemouse;
@@ -59,6 +60,8 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    // Relays of other servers' devices.
+    &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,

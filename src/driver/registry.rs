@@ -181,6 +181,8 @@ pub enum Interface {
     Poser,
     /// Force feedback (`vrpn_ForceDevice`).
     ForceDevice,
+    /// Image streams (`vrpn_Imager`).
+    Imager,
 }
 
 impl Interface {
@@ -195,6 +197,7 @@ impl Interface {
             Interface::AnalogOutput => "analog output",
             Interface::Poser => "poser",
             Interface::ForceDevice => "force device",
+            Interface::Imager => "imager",
         }
     }
 }
