@@ -167,3 +167,7 @@ struct SoundDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/REDUNDANT_TRANSMISSION.md")]
 struct RedundantDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/REPLAY.md")]
+struct ReplayDoctests;

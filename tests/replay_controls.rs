@@ -2,19 +2,20 @@
 //! pass plays, and `vrpn_File_Controller` messages, locally and through a relay over
 //! 127.0.0.1.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::net::Ipv4Addr;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use vrpn::connection::FileController;
+use vrpn::devices::base::{PING_MESSAGE, PONG_MESSAGE};
 use vrpn::devices::ServerDevice;
 use vrpn::forward::Relay;
 use vrpn::log::LogWriter;
 use vrpn::wire::payload::tracker::{PosQuat, POS_QUAT};
-use vrpn::wire::{system, Cookie};
-use vrpn::{Connection, Now, TimeVal, TrackerRemote};
+use vrpn::wire::{class, system, Cookie};
+use vrpn::{Connection, Now, SenderFilter, TimeVal, TrackerRemote};
 
 /// The first pose's time in the log.
 const T0: TimeVal = TimeVal {
@@ -186,6 +187,19 @@ fn a_relayed_replay_is_controlled_over_the_network() {
         }
     };
     until("connected", &mut pass, &|| client.connected());
+    // A log answers no pings: the relay answers them for the device it re-serves.
+    let sender = client.register_sender("Tracker0").unwrap();
+    let ping = client.register_type(PING_MESSAGE).unwrap();
+    let pong = client.register_type(PONG_MESSAGE).unwrap();
+    let pongs = Rc::new(Cell::new(0));
+    let p = pongs.clone();
+    client.register_handler(pong, SenderFilter::Only(sender), move |_| {
+        p.set(p.get() + 1)
+    });
+    client
+        .pack_message(TimeVal::now(), ping, sender, &[], class::RELIABLE)
+        .unwrap();
+    until("pong", &mut pass, &|| pongs.get() > 0);
     // Pause: the replay stops, nothing more arrives.
     until("paused", &mut pass, &|| fc.set_replay_rate(0.0).is_ok());
     for _ in 0..100 {

@@ -154,8 +154,8 @@ impl ReplayControl<'_> {
     }
 
     /// Moves to `bookmark` without delivering the messages in between: the next message
-    /// played is the one that was next when the bookmark was taken. Returns false for a
-    /// bookmark of another log.
+    /// played is the one that was next when the bookmark was taken. Returns false (and moves
+    /// nothing) for a bookmark beyond the end of this log (one taken on a longer log).
     pub fn go_to_bookmark(&self, bookmark: Bookmark) -> bool {
         let ok = self.conn.with_replay(|r| r.go_to_bookmark(bookmark));
         self.conn.skip_due();

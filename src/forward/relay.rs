@@ -16,7 +16,8 @@
 //! replay, and clients control it with `vrpn_File_Controller` messages
 //! ([`FileController`](crate::connection::FileController), or C++'s), which the relay passes
 //! to the replay. Each relayed device of one log passes them on, and the controls are
-//! idempotent (a rate, a reset, a time to play to).
+//! idempotent (a rate, a reset, a time to play to). A log answers no pings, so the relay
+//! answers its clients' pings for a relayed log's devices itself.
 
 use std::time::Instant;
 
@@ -56,11 +57,17 @@ impl Relay {
         let mut down = ConnectionForwarder::new(&upstream, server).from_peers_only(true);
         down.forward_sender(&parsed.device, &name, ServiceClass::RELIABLE)?;
         let mut up = ConnectionForwarder::new(server, &upstream).from_peers_only(true);
-        up.forward_sender(&name, &parsed.device, ServiceClass::RELIABLE)?;
         if upstream.is_replay() {
-            // A relayed log: clients control its replay (C++ vrpn_File_Controller messages).
+            // A relayed log: nothing upstream answers requests or pings, so the relay answers
+            // the clients' pings itself (as the device's server did while it was logged), and
+            // clients control the replay (C++ vrpn_File_Controller messages).
+            let sender = crate::devices::base::register_sender(server, &name)?;
+            let ids = crate::devices::base::register_base_types(server, sender)?;
+            crate::devices::base::serve_pings(server, &ids);
             let controller = crate::wire::payload::file_controller::SENDER;
             up.forward_sender(controller, controller, ServiceClass::RELIABLE)?;
+        } else {
+            up.forward_sender(&name, &parsed.device, ServiceClass::RELIABLE)?;
         }
         Ok(Relay {
             name,

@@ -284,13 +284,7 @@ impl Replay {
     /// Asks to play every entry up to `elapsed` seconds after the first message; rewinds first
     /// when that is before the current file time.
     pub fn play_to_time(&mut self, elapsed: f64) {
-        let target = self.base_time().plus_secs(elapsed);
-        if target < self.file_time {
-            self.reset();
-        }
-        self.played = 0;
-        self.last_wall = None;
-        self.mode = Mode::Until(target);
+        self.play_to_filetime(self.base_time().plus_secs(elapsed));
     }
 
     /// Asks to play exactly the next entry (stepping, or "as fast as the caller loops").
@@ -302,15 +296,7 @@ impl Replay {
     /// the connection feeds the system entries passed over through its id tables, so descriptions
     /// are not lost (C++ loses them). Returns whether the target lies within the log.
     pub fn jump_to_time(&mut self, elapsed: f64) -> bool {
-        let target = self.base_time().plus_secs(elapsed);
-        if target < self.file_time || self.eof {
-            self.reset();
-            self.reset_pending = false;
-        }
-        self.skipping = true;
-        self.mode = Mode::Until(target);
-        self.last_wall = None;
-        self.highest.is_some_and(|h| target <= h)
+        self.jump_to_filetime(self.base_time().plus_secs(elapsed))
     }
 
     /// File time now: where the replay stands on the log's own time axis.
@@ -387,7 +373,7 @@ impl Replay {
 
     /// Moves back (or forward) to `bookmark` without playing user messages: the next entry
     /// played is the one that was next when the bookmark was taken. Returns false (and moves
-    /// nothing) for a bookmark that does not lie on an entry of this log.
+    /// nothing) for a bookmark beyond the end of this log (one taken on a longer log).
     pub fn go_to_bookmark(&mut self, bookmark: Bookmark) -> bool {
         if bookmark.offset < COOKIE_LEN || bookmark.offset > self.reader.bytes().len() {
             return false;
