@@ -14,8 +14,12 @@ pub mod cerealbox;
 pub mod dyna;
 pub mod fastrak;
 pub mod flock;
+pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod pinchglove;
+pub mod uncjoystick;
+pub mod wanda;
 
 /// Every device kind the server knows, by its `vrpn.cfg` keywords. The server finds an
 /// entry's parser here; a keyword no entry serves is an error naming it.
@@ -35,6 +39,10 @@ pub static REGISTRY: &[&Driver] = &[
     &dyna::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
+    &immersionbox::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
+    &pinchglove::DRIVER,
+    &uncjoystick::DRIVER,
+    &wanda::DRIVER,
 ];

@@ -249,7 +249,11 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
             "vrpn_CerealBox",
-            "vrpn_Tracker_Dyna"
+            "vrpn_Tracker_Dyna",
+            "vrpn_Wanda",
+            "vrpn_Button_PinchGlove",
+            "vrpn_Joystick",
+            "vrpn_ImmersionBox"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
