@@ -107,13 +107,25 @@ fn main() -> ExitCode {
             BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
         },
     );
-    let devices = match devices {
+    let mut devices = match devices {
         Ok(d) => d,
         Err(e) => {
             errln!("{PROGRAM}: {e}");
             return ExitCode::from(1);
         }
     };
+    // Remote-controlled forwarding, as C++ vrpn_server runs it (off until -forwardports).
+    let served = devices.len();
+    match vrpn::forward::ForwarderServer::new(&conn) {
+        Ok(forwarder) => {
+            forwarder.set_nic(opts.nic);
+            if let Some(ports) = &opts.forward_ports {
+                forwarder.allow_ports(ports.clone());
+            }
+            devices.push(Box::new(forwarder));
+        }
+        Err(e) => errln!("{PROGRAM}: forwarding unavailable: {e}"),
+    }
     // Diagnostics go to stderr, once each; standard output carries only the "serving" line
     // (scripts read the port from it). See "Output streams" in the README.
     conn.on_notice(move |n| {
@@ -133,8 +145,7 @@ fn main() -> ExitCode {
         .map_or("all interfaces".to_string(), |n| n.to_string());
     if !opts.quiet {
         outln!(
-            "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
-            devices.len(),
+            "{PROGRAM}: serving {served} device(s) from {} on port {port} ({nic})",
             opts.config
         );
     }
