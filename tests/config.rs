@@ -259,6 +259,7 @@ fn sample_config_commented_examples_parse() {
     // The Fastrak examples' continuation lines are read as such.
     let fastraks: Vec<Fastrak> = entries
         .iter()
+        .filter(|e| e.keyword == "vrpn_Tracker_Fastrak")
         .filter_map(|e| match typed(e) {
             DeviceConfig::Fastrak(f) => Some(f),
             _ => None,
