@@ -127,16 +127,25 @@ fn size(n: i32, what: &str, max: usize) -> Result<usize, Failure> {
     }
 }
 
-/// A time argument from C: NULL means now.
+/// A time argument from C: NULL means now; a time a message header cannot carry (before
+/// 1970, after 2106) is refused.
 ///
 /// # Safety
 /// `time` is NULL or points to a readable `VrpnTimeVal`.
-unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> TimeVal {
+unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> Result<TimeVal, Failure> {
     if time.is_null() {
-        conn.now().wall
+        return Ok(conn.now().wall);
+    }
+    // SAFETY: non-null and readable (caller's contract).
+    let raw = unsafe { time.read() };
+    let t = TimeVal::from(raw);
+    if t.fits_header() {
+        Ok(t)
     } else {
-        // SAFETY: non-null and readable (caller's contract).
-        TimeVal::from(unsafe { time.read() })
+        Err(Failure::invalid(format!(
+            "time {}.{:06} s is outside what a VRPN message carries (0 to 4294967295 s)",
+            raw.sec, raw.usec
+        )))
     }
 }
 
@@ -208,7 +217,7 @@ pub extern "C" fn vrpn_tracker_server_report_pose(
             (
                 doubles::<3>(pos, "pos")?,
                 doubles::<4>(quat, "quat")?,
-                time_arg(t.server.connection(), time),
+                time_arg(t.server.connection(), time)?,
             )
         };
         t.server.report_pose(sensor, time, pos, quat)?;
@@ -233,7 +242,7 @@ pub extern "C" fn vrpn_tracker_server_report_velocity(
             (
                 doubles::<3>(vel, "vel")?,
                 doubles::<4>(vel_quat, "vel_quat")?,
-                time_arg(t.server.connection(), time),
+                time_arg(t.server.connection(), time)?,
             )
         };
         t.server.report_velocity(sensor, time, vel, vel_quat, dt)?;
@@ -307,7 +316,7 @@ pub extern "C" fn vrpn_button_server_report_changes(
 ) -> VrpnStatus {
     status(handle::with(button, |b| {
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(b.server.connection(), time) };
+        let time = unsafe { time_arg(b.server.connection(), time)? };
         b.server.set_timestamp(time);
         b.server.report_changes()?;
         Ok(VrpnStatus::Ok)
@@ -391,7 +400,7 @@ pub extern "C" fn vrpn_analog_server_report(
     status(handle::with(analog, |a| {
         let mut s = a.server()?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(s.connection(), time) };
+        let time = unsafe { time_arg(s.connection(), time)? };
         s.report(Some(time))?;
         Ok(VrpnStatus::Ok)
     }))
@@ -407,7 +416,7 @@ pub extern "C" fn vrpn_analog_server_report_changes(
     status(handle::with(analog, |a| {
         let mut s = a.server()?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(s.connection(), time) };
+        let time = unsafe { time_arg(s.connection(), time)? };
         Ok(if s.report_changes(Some(time))? {
             VrpnStatus::Ok
         } else {
@@ -493,7 +502,7 @@ pub extern "C" fn vrpn_dial_server_report_changes(
             .try_borrow_mut()
             .map_err(|_| Failure::new(VrpnStatus::Busy, "dial server is busy"))?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        s.set_timestamp(unsafe { time_arg(&d.conn, time) });
+        s.set_timestamp(unsafe { time_arg(&d.conn, time)? });
         s.report_changes()?;
         Ok(VrpnStatus::Ok)
     }))

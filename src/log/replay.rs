@@ -121,7 +121,7 @@ impl Replay {
         let Some(last) = self.last_wall.replace(now) else {
             return; // first pass after open or reset: arm the clock, play nothing
         };
-        self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+        self.accumulate(now.duration_since(last));
         let target = self.file_time.plus_secs(self.accum);
         if self.peek_time().is_some_and(|t| t < target) {
             self.accum = 0.0;
@@ -207,10 +207,19 @@ impl Replay {
     /// faster, `f64::INFINITY` as fast as possible. Time so far is accumulated at the old rate.
     pub fn set_rate(&mut self, rate: f64, now: Instant) {
         if let Some(last) = self.last_wall {
-            self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+            self.accumulate(now.duration_since(last));
             self.last_wall = Some(now);
         }
         self.rate = if rate.is_nan() { 0.0 } else { rate.max(0.0) };
+    }
+
+    /// Adds `elapsed` wall time at the current rate to the file time still to play. (No time
+    /// adds nothing, even at an infinite rate, where the product would be NaN and stall the
+    /// replay for good.)
+    fn accumulate(&mut self, elapsed: std::time::Duration) {
+        if !elapsed.is_zero() && self.rate > 0.0 {
+            self.accum += elapsed.as_secs_f64() * self.rate;
+        }
     }
 
     /// The speed factor.
@@ -243,8 +252,12 @@ impl Replay {
     }
 
     /// Asks to play every entry up to `elapsed` seconds after the first message; rewinds first
-    /// when that is before the current file time.
+    /// when that is before the current file time. The target saturates at the ends of
+    /// [`TimeVal`]'s range (`f64::INFINITY` plays to the end); NaN asks for nothing.
     pub fn play_to_time(&mut self, elapsed: f64) {
+        if elapsed.is_nan() {
+            return;
+        }
         let target = self.base_time().plus_secs(elapsed);
         if target < self.file_time {
             self.reset();
@@ -260,8 +273,13 @@ impl Replay {
 
     /// Moves to `elapsed` seconds after the first message without delivering user messages;
     /// the connection feeds the system entries passed over through its id tables, so descriptions
-    /// are not lost (C++ loses them). Returns whether the target lies within the log.
+    /// are not lost (C++ loses them). Returns whether the target lies within the log. The
+    /// target saturates at the ends of [`TimeVal`]'s range (`f64::INFINITY` goes to the end
+    /// and returns false); NaN is refused (false, nothing moves).
     pub fn jump_to_time(&mut self, elapsed: f64) -> bool {
+        if elapsed.is_nan() {
+            return false;
+        }
         let target = self.base_time().plus_secs(elapsed);
         if target < self.file_time || self.eof {
             self.reset();
@@ -307,5 +325,41 @@ impl Replay {
     /// True while entries remain due in this pass.
     pub fn busy(&self) -> bool {
         self.mode != Mode::Idle && !self.eof
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::log::format::encode_entry;
+    use crate::wire::Cookie;
+
+    /// A log of `n` user messages 10 ms apart.
+    fn log(n: i64) -> LogReader {
+        let mut file = Cookie::ours(0).to_bytes().to_vec();
+        let mut buf = [0u8; 64];
+        for i in 0..n {
+            let t = TimeVal::new(100, 0).plus_secs(i as f64 * 0.01);
+            let len = encode_entry(&mut buf, 0, 0, t, &[i as u8; 4]).unwrap();
+            file.extend_from_slice(&buf[..len]);
+        }
+        LogReader::from_bytes(file, "mem.vrpn").unwrap()
+    }
+
+    fn drain(r: &mut Replay) -> usize {
+        std::iter::from_fn(|| r.next_due()).count()
+    }
+
+    #[test]
+    fn an_infinite_rate_and_no_time_passing_do_not_stall_the_clock() {
+        let mut r = Replay::from_reader(log(10));
+        assert_eq!(drain(&mut r), 0, "no leading system entries");
+        let t0 = Instant::now();
+        r.tick(t0); // arms the clock
+        r.set_rate(f64::INFINITY, t0);
+        r.tick(t0); // no time passed: ∞ × 0 must not poison the clock
+        assert_eq!(drain(&mut r), 0);
+        r.tick(t0 + std::time::Duration::from_millis(1));
+        assert_eq!(drain(&mut r), 10);
     }
 }

@@ -50,7 +50,7 @@ pub(crate) fn seconds(timeout: f64) -> PyResult<Duration> {
 /// in steps of at most a millisecond between polls; Ctrl-C is honoured at each step.
 pub(crate) fn wait(py: Python<'_>, conn: &Connection, timeout: f64) -> PyResult<bool> {
     const STEP: Duration = Duration::from_millis(1);
-    let end = Instant::now() + seconds(timeout)?;
+    let end = crate::time::instant_after(Instant::now(), seconds(timeout)?);
     loop {
         if run(|| conn.wait(Duration::ZERO))? {
             return Ok(true);
@@ -263,6 +263,15 @@ impl Replay {
     }
 }
 
+/// A position in seconds for `seek` and `play_to`: NaN is refused; anything else saturates at
+/// the ends of the log's time range (`float("inf")` is the end).
+fn not_nan(secs: f64) -> PyResult<f64> {
+    if secs.is_nan() {
+        return Err(PyValueError::new_err("seconds must be a number, got nan"));
+    }
+    Ok(secs)
+}
+
 #[pymethods]
 impl Replay {
     /// Speed: 1.0 real time, 0 paused, 10 ten times faster, float("inf") as fast as possible.
@@ -284,11 +293,13 @@ impl Replay {
     /// Moves to `secs` after the first message without delivering the messages in between.
     /// Returns whether that time is inside the log.
     fn seek(&self, secs: f64) -> PyResult<bool> {
+        let secs = not_nan(secs)?;
         self.with(|r| r.jump_to_time(secs))
     }
 
     /// Delivers, now, every message up to `secs` after the first one.
     fn play_to(&self, secs: f64) -> PyResult<()> {
+        let secs = not_nan(secs)?;
         self.with(|r| r.play_to_time(secs))
     }
 

@@ -163,7 +163,7 @@ impl TrackerServer {
         quat: [f64; 4],
         time: Option<f64>,
     ) -> PyResult<()> {
-        let t = time_or_now(time, self.inner.connection());
+        let t = time_or_now(time, self.inner.connection())?;
         run(|| self.inner.report_pose(sensor, t, pos, quat))
     }
 
@@ -178,7 +178,7 @@ impl TrackerServer {
         dt: f64,
         time: Option<f64>,
     ) -> PyResult<()> {
-        let t = time_or_now(time, self.inner.connection());
+        let t = time_or_now(time, self.inner.connection())?;
         run(|| self.inner.report_velocity(sensor, t, vel, vel_quat, dt))
     }
 
@@ -227,7 +227,7 @@ impl ButtonServer {
     #[pyo3(signature = (time = None))]
     fn report_changes(&self, time: Option<f64>) -> PyResult<()> {
         self.inner
-            .set_timestamp(time_or_now(time, self.inner.connection()));
+            .set_timestamp(time_or_now(time, self.inner.connection())?);
         run(|| self.inner.report_changes())
     }
 
@@ -286,14 +286,14 @@ impl AnalogServer {
             }
             self.inner.channels_mut()[..v.len()].copy_from_slice(&v);
         }
-        let t = time_or_now(time, self.inner.connection());
+        let t = time_or_now(time, self.inner.connection())?;
         run(|| self.inner.report(Some(t)))
     }
 
     /// Sends every channel if any changed since the last report; returns whether it sent.
     #[pyo3(signature = (time = None))]
     fn report_changes(&mut self, time: Option<f64>) -> PyResult<bool> {
-        let t = time_or_now(time, self.inner.connection());
+        let t = time_or_now(time, self.inner.connection())?;
         run(|| self.inner.report_changes(Some(t)))
     }
 
@@ -332,7 +332,7 @@ impl DialServer {
                 self.inner.num_dials()
             )));
         }
-        self.inner.set_timestamp(time_or_now(time, &self.conn));
+        self.inner.set_timestamp(time_or_now(time, &self.conn)?);
         self.inner.set_dial(i, revolutions);
         run(|| self.inner.report_changes())
     }
@@ -362,7 +362,7 @@ impl TextSender {
     #[pyo3(signature = (text, severity = "normal", level = 0, time = None))]
     fn send(&self, text: &str, severity: &str, level: u32, time: Option<f64>) -> PyResult<()> {
         let s = parse_severity(severity)?;
-        let t = time.map(crate::TimeVal::from_secs_f64);
+        let t = time.map(super::header_time).transpose()?;
         run(|| self.inner.send_message(text, s, level, t))
     }
 }

@@ -3,7 +3,7 @@
 
 use super::entry::DeviceConfig;
 use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fields::{any_int, baud, device_name, f32_field, need, positive, uint_in};
+use super::fields::{any_int, baud, device_name, f32_field, need, period, rate, uint_in};
 use super::lines::from_token;
 use super::{MAX_BUTTONS, MAX_CHANNELS, MAX_DIALS, MAX_FLOCK_SENSORS, MAX_TRACKER_SENSORS};
 
@@ -225,7 +225,7 @@ pub(super) fn parse_tracker_null(ctx: &Ctx<'_>, a: &[&str]) -> Result<DeviceConf
     Ok(DeviceConfig::TrackerNull(TrackerNull {
         name: device_name(ctx, "name", a[0])?,
         sensors: uint_in(ctx, "sensors", a[1], 1, MAX_TRACKER_SENSORS)?,
-        rate: positive(ctx, "rate", a[2])?,
+        rate: rate(ctx, "rate", a[2])?,
     }))
 }
 
@@ -239,7 +239,7 @@ pub(super) fn parse_tracker_spin(ctx: &Ctx<'_>, a: &[&str]) -> Result<DeviceConf
     Ok(DeviceConfig::TrackerSpin(TrackerSpin {
         name: device_name(ctx, "name", a[0])?,
         sensors: uint_in(ctx, "sensors", a[1], 1, MAX_TRACKER_SENSORS)?,
-        rate: positive(ctx, "rate", a[2])?,
+        rate: rate(ctx, "rate", a[2])?,
         axis: [
             f32_field(ctx, "axis_x", a[3])?,
             f32_field(ctx, "axis_y", a[4])?,
@@ -254,7 +254,7 @@ pub(super) fn parse_button_example(ctx: &Ctx<'_>, a: &[&str]) -> Result<DeviceCo
     Ok(DeviceConfig::ButtonExample(ButtonExample {
         name: device_name(ctx, "name", a[0])?,
         buttons: uint_in(ctx, "buttons", a[1], 1, MAX_BUTTONS)?,
-        rate: positive(ctx, "rate", a[2])?,
+        rate: rate(ctx, "rate", a[2])?,
     }))
 }
 
@@ -264,7 +264,7 @@ pub(super) fn parse_dial_example(ctx: &Ctx<'_>, a: &[&str]) -> Result<DeviceConf
         name: device_name(ctx, "name", a[0])?,
         dials: uint_in(ctx, "dials", a[1], 1, MAX_DIALS)?,
         spin_rate: f32_field(ctx, "spin_rate", a[2])?,
-        update_rate: positive(ctx, "update_rate", a[3])?,
+        update_rate: rate(ctx, "update_rate", a[3])?,
     }))
 }
 
@@ -273,7 +273,7 @@ pub(super) fn parse_analog_example(ctx: &Ctx<'_>, a: &[&str]) -> Result<DeviceCo
     Ok(DeviceConfig::AnalogExample(AnalogExample {
         name: device_name(ctx, "name", a[0])?,
         channels: uint_in(ctx, "channels", a[1], 1, MAX_CHANNELS)?,
-        rate: positive(ctx, "rate", a[2])?,
+        rate: rate(ctx, "rate", a[2])?,
     }))
 }
 
@@ -285,7 +285,7 @@ pub(super) fn parse_text_example(
     need(ctx, a, 3, "name, period_seconds, message")?;
     Ok(DeviceConfig::TextExample(TextExample {
         name: device_name(ctx, "name", a[0])?,
-        period: positive(ctx, "period_seconds", a[1])?,
+        period: period(ctx, "period_seconds", a[1])?,
         message: from_token(rest, 2).to_owned(),
     }))
 }

@@ -5,7 +5,7 @@ use std::fmt;
 
 use super::entry::DeviceConfig;
 use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fields::{block_need, device_name, device_ref, f32_field, need, non_negative, uint_in};
+use super::fields::{block_need, device_name, device_ref, f32_field, need, rate_or_zero, uint_in};
 use super::lines::{c_tokens, Reader};
 use super::{kw, MAX_BUTTONFLY_AXES, MAX_BUTTONFLY_NAME, MAX_BUTTONS, MAX_CHANNELS};
 
@@ -251,7 +251,7 @@ pub(super) fn parse_analog_fly(
 ) -> Result<DeviceConfig, ConfigError> {
     need(ctx, a, 3, "name, update_rate, absolute|differential")?;
     let name = device_name(ctx, "name", a[0])?;
-    let update_rate = non_negative(ctx, "update_rate", a[1])?;
+    let update_rate = rate_or_zero(ctx, "update_rate", a[1])?;
     let mode = FlyMode::parse(a[2]).ok_or_else(|| {
         ctx.err(
             ConfigErrorKind::BadValue,
@@ -353,7 +353,7 @@ pub(super) fn parse_button_fly(
     need(ctx, a, 2, "name, update_rate")?;
     let mut fly = ButtonFly {
         name: device_name(ctx, "name", a[0])?,
-        update_rate: non_negative(ctx, "update_rate", a[1])?,
+        update_rate: rate_or_zero(ctx, "update_rate", a[1])?,
         axes: Vec::new(),
         vel_scale: None,
         rot_scale: None,
