@@ -288,9 +288,9 @@ impl Session {
                 }
                 return None;
             };
-            let len = due.header.payload_len as usize;
-            self.scratch[..len]
-                .copy_from_slice(&replay.bytes()[due.payload_at..due.payload_at + len]);
+            let payload = replay.payload(&due);
+            let len = payload.len();
+            self.scratch[..len].copy_from_slice(payload);
             if let Some(w) = self.logs.incoming.as_mut() {
                 // Re-log of a replay: original entry, playback wall-clock time (as C++).
                 let _ = w.log_message(
