@@ -27,7 +27,10 @@ use output::{errln, outln};
 const PROGRAM: &str = "vrpn_print_devices";
 
 const USAGE: &str =
-    "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] DEVICE@HOST[:PORT]...
+    "usage: vrpn_print_devices [--json] [--seconds S] [--log FILE] [-rli FILE] [-rlo FILE]
+                          [-notracker] [-nobutton]
+                          [-noanalog] [-nodial] [-notext] [-trackerstride N]
+                          DEVICE@HOST[:PORT]...
        vrpn_print_devices --list HOST[:PORT]
        vrpn_print_devices --help | --version
   DEVICE@HOST        e.g. Tracker0@localhost, Tracker0@tcp://host:3883, Tracker0@host:3884
@@ -38,9 +41,34 @@ const USAGE: &str =
   --log FILE         log every message received to FILE (C++ .vrpn format; one file per
                      server: FILE-2.vrpn, … for the second and later); replay it with
                      DEVICE@file:FILE
+  -rli FILE          ask each server to log what it receives from us to FILE, on its
+                     machine (C++ remote logging; a server of this crate writes it inside
+                     its -logdir folder, and only under a plain file name)
+  -rlo FILE          ask each server to log what it sends us to FILE, on its machine
+  -notracker         do not print tracker reports of the devices that follow
+  -nobutton          do not print button reports of the devices that follow
+  -noanalog          do not print analog reports of the devices that follow
+  -nodial            do not print dial reports of the devices that follow
+  -notext            do not print text messages (warnings and errors included) of the
+                     devices that follow
+  -trackerstride N   print every Nth report of each tracker sensor of the devices that
+                     follow (N >= 1)
+                     (each of these also takes two dashes: --notracker, --trackerstride N)
   --list HOST[:PORT] print the device names the server announces, then exit
   -h, --help         print this help
   --version          print the version";
+
+/// The C++ options spelt with one dash.
+const CPP_OPTIONS: &[&str] = &[
+    "rli",
+    "rlo",
+    "notracker",
+    "nobutton",
+    "noanalog",
+    "nodial",
+    "notext",
+    "trackerstride",
+];
 
 /// What the command line asks for.
 enum Command {
@@ -50,20 +78,48 @@ enum Command {
     Version,
 }
 
+/// Which reports of a device are printed (the options before its name, as in C++).
+#[derive(Clone, Copy)]
+struct Shown {
+    tracker: bool,
+    button: bool,
+    analog: bool,
+    dial: bool,
+    text: bool,
+    /// Every Nth report of each tracker sensor.
+    tracker_stride: u32,
+}
+
+impl Default for Shown {
+    fn default() -> Self {
+        Shown {
+            tracker: true,
+            button: true,
+            analog: true,
+            dial: true,
+            text: true,
+            tracker_stride: 1,
+        }
+    }
+}
+
 /// Options of the report printer.
 #[derive(Default)]
 struct PrintOptions {
     json: bool,
     seconds: Option<f64>,
     log: Option<String>,
-    names: Vec<String>,
+    remote_in: Option<String>,
+    remote_out: Option<String>,
+    names: Vec<(String, Shown)>,
 }
 
 fn parse_args() -> Result<Command, lexopt::Error> {
     use lexopt::prelude::*;
-    let mut parser = lexopt::Parser::from_env();
+    let mut parser = lexopt::Parser::from_args(cli::with_cpp_spellings(CPP_OPTIONS));
     let mut o = PrintOptions::default();
     let mut list = None;
+    let mut shown = Shown::default();
     while let Some(arg) = parser.next()? {
         match arg {
             Long("json") => o.json = true,
@@ -75,10 +131,24 @@ fn parse_args() -> Result<Command, lexopt::Error> {
                 o.seconds = Some(s);
             }
             Long("log") => o.log = Some(parser.value()?.string()?),
+            Long("rli") => o.remote_in = Some(parser.value()?.string()?),
+            Long("rlo") => o.remote_out = Some(parser.value()?.string()?),
             Long("list") => list = Some(parser.value()?.string()?),
+            Long("notracker") => shown.tracker = false,
+            Long("nobutton") => shown.button = false,
+            Long("noanalog") => shown.analog = false,
+            Long("nodial") => shown.dial = false,
+            Long("notext") => shown.text = false,
+            Long("trackerstride") => {
+                let n: u32 = cli::value(&mut parser, "-trackerstride", "a whole number")?;
+                if n == 0 {
+                    return Err("-trackerstride argument must be 1 or greater".into());
+                }
+                shown.tracker_stride = n;
+            }
             Short('h') | Long("help") => return Ok(Command::Help),
             Long("version") => return Ok(Command::Version),
-            Value(name) => o.names.push(name.string()?),
+            Value(name) => o.names.push((name.string()?, shown)),
             _ => return Err(arg.unexpected()),
         }
     }
@@ -264,7 +334,8 @@ impl Opened {
 fn print(o: &PrintOptions) -> u8 {
     let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
-    for name in &o.names {
+    for (name, shown) in &o.names {
+        let (name, shown) = (name.as_str(), *shown);
         if let Err(e) = DeviceName::parse(name) {
             errln!("{PROGRAM}: {e}");
             return 2;
@@ -276,6 +347,17 @@ fn print(o: &PrintOptions) -> u8 {
                 return 2;
             }
         };
+        if o.remote_in.is_some() || o.remote_out.is_some() {
+            let conn = tracker.connection();
+            let asked = conn.request_remote_logging(
+                o.remote_in.as_deref().unwrap_or(""),
+                o.remote_out.as_deref().unwrap_or(""),
+            );
+            if let Err(e) = asked {
+                errln!("{PROGRAM}: {name}: -rli/-rlo: {e}");
+                return 2;
+            }
+        }
         if let Some(path) = &o.log {
             let conn = tracker.connection();
             if !logged.iter().any(|c: &Connection| c.same_as(conn)) {
@@ -293,7 +375,7 @@ fn print(o: &PrintOptions) -> u8 {
                 logged.push(conn.clone());
             }
         }
-        let opened = match open_others(name, tracker, o.json) {
+        let opened = match open_others(name, tracker, o.json, shown) {
             Ok(d) => d,
             Err(e) => {
                 errln!("{PROGRAM}: {name}: {e}");
@@ -301,7 +383,20 @@ fn print(o: &PrintOptions) -> u8 {
             }
         };
         if !o.json {
-            outln!("Opened {name} as: Tracker Button Analog Dial Text.");
+            let kinds = [
+                (shown.tracker, " Tracker"),
+                (shown.button, " Button"),
+                (shown.analog, " Analog"),
+                (shown.dial, " Dial"),
+                (shown.text, " Text"),
+            ];
+            let mut line = format!("Opened {name} as:");
+            for (on, kind) in kinds {
+                if on {
+                    line.push_str(kind);
+                }
+            }
+            outln!("{line}.");
         }
         devices.push(opened);
     }
@@ -329,12 +424,48 @@ fn print(o: &PrintOptions) -> u8 {
     0
 }
 
+/// Every Nth report of each sensor (C++ `-trackerstride`: the Nth, 2Nth, … are printed).
+struct Stride {
+    every: u32,
+    counts: Vec<u32>,
+}
+
+impl Stride {
+    fn new(every: u32) -> Stride {
+        Stride {
+            every,
+            counts: Vec::new(),
+        }
+    }
+
+    /// Counts a report of `sensor`; true when it is one to print.
+    fn take(&mut self, sensor: usize) -> bool {
+        if self.every <= 1 {
+            return true;
+        }
+        if self.counts.len() <= sensor {
+            self.counts.resize(sensor + 1, 0);
+        }
+        self.counts[sensor] += 1;
+        if self.counts[sensor] >= self.every {
+            self.counts[sensor] = 0;
+            true
+        } else {
+            false
+        }
+    }
+}
+
 /// Attaches the tracker printers to `tracker` (the C++ formats, or JSON objects of kind pose,
 /// velocity and acceleration).
-fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &ClockView) {
+fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &ClockView, stride: u32) {
     let device = tracker.device().to_string();
     let (d, l, ck) = (device.clone(), label.to_owned(), clock.clone());
+    let mut due = Stride::new(stride);
     tracker.on_pose(move |r| {
+        if !due.take(r.sensor) {
+            return;
+        }
         if json {
             outln!(
                 "{}",
@@ -352,7 +483,11 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &Clock
         }
     });
     let (d, l, ck) = (device.clone(), label.to_owned(), clock.clone());
+    let mut due = Stride::new(stride);
     tracker.on_velocity(move |r| {
+        if !due.take(r.sensor) {
+            return;
+        }
         let q = &r.vel_quat;
         if json {
             let w = r.angular_velocity();
@@ -374,7 +509,11 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &Clock
         }
     });
     let (d, l, ck) = (device, label.to_owned(), clock.clone());
+    let mut due = Stride::new(stride);
     tracker.on_acceleration(move |r| {
+        if !due.take(r.sensor) {
+            return;
+        }
         let q = &r.acc_quat;
         if json {
             outln!(
@@ -398,17 +537,32 @@ fn print_tracker(tracker: &TrackerRemote, label: &str, json: bool, clock: &Clock
 /// Opens the Button, Analog, Dial and Text remotes of `name` beside its `tracker` and attaches
 /// the printers (the C++ formats, or JSON objects of kind pose, velocity, acceleration, button,
 /// button_states, analog, dial and text).
-fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened, vrpn::Error> {
+fn open_others(
+    name: &str,
+    tracker: TrackerRemote,
+    json: bool,
+    shown: Shown,
+) -> Result<Opened, vrpn::Error> {
     let clock = ClockView::default();
-    print_tracker(&tracker, name, json, &clock);
+    if shown.tracker {
+        print_tracker(&tracker, name, json, &clock, shown.tracker_stride);
+    }
     let button = ButtonRemote::new(name)?;
     let analog = AnalogRemote::new(name)?;
     let dial = DialRemote::new(name)?;
     let text = TextReceiver::new(name)?;
+    if !shown.text {
+        // Warnings and errors too (C++ removes the devices from its text printer).
+        tracker.connection().mute_text_printer(tracker.sender());
+    }
     let device = button.device().to_string();
     let label = name.to_string();
     let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
+    let on = shown.button;
     button.on_change(move |c| {
+        if !on {
+            return;
+        }
         if json {
             outln!(
                 "{}",
@@ -427,6 +581,9 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
     });
     let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
     button.on_states(move |st| {
+        if !on {
+            return;
+        }
         if json {
             outln!(
                 "{}",
@@ -453,7 +610,11 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
         }
     });
     let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
+    let on = shown.analog;
     analog.on_report(move |r| {
+        if !on {
+            return;
+        }
         if json {
             outln!(
                 "{}",
@@ -481,7 +642,11 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
         }
     });
     let (dv, l, ck) = (device.clone(), label.clone(), clock.clone());
+    let on = shown.dial;
     dial.on_update(move |u| {
+        if !on {
+            return;
+        }
         if json {
             outln!(
                 "{}",
@@ -504,7 +669,11 @@ fn open_others(name: &str, tracker: TrackerRemote, json: bool) -> Result<Opened,
         }
     });
     let (dv, l, ck) = (device, label, clock.clone());
+    let on = shown.text;
     text.on_message(move |msg| {
+        if !on {
+            return;
+        }
         if json {
             let severity = match msg.severity {
                 TextSeverity::Normal => "normal",

@@ -75,6 +75,15 @@ fn main() -> ExitCode {
             }
         }
     }
+    if let Some(dir) = &opts.log_dir {
+        match vrpn::log::LogFolder::new(dir) {
+            Ok(folder) => conn.set_remote_log_folder(Some(folder)),
+            Err(e) => {
+                errln!("{PROGRAM}: -logdir {e}");
+                return ExitCode::from(1);
+            }
+        }
+    }
     let verbose = opts.verbose;
     let devices = build_devices(&entries, &conn, opts.warn_only, |note| match note {
         BuildNote::Opened { entry, name } if verbose => {
@@ -105,11 +114,13 @@ fn main() -> ExitCode {
     let nic = opts
         .nic
         .map_or("all interfaces".to_string(), |n| n.to_string());
-    outln!(
-        "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
-        devices.len(),
-        opts.config
-    );
+    if !opts.quiet {
+        outln!(
+            "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
+            devices.len(),
+            opts.config
+        );
+    }
     let mut server = ServerLoop::new(conn, devices, opts.sleep);
     server.quit_after_last(opts.quit_after_last);
     server.flush_logs_every_pass(opts.flush_logs);

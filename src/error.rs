@@ -51,6 +51,9 @@ pub enum Error {
     NotConnected(ConnectionState),
     /// The operation needs a different kind of connection (e.g. a server socket on a client).
     Unsupported(&'static str),
+    /// An argument is out of range for the device (an image region outside the image, a
+    /// channel that does not exist, a name too long for its field): the text says which.
+    InvalidArgument(String),
 }
 
 impl Error {
@@ -99,6 +102,7 @@ impl std::fmt::Display for Error {
                 "not sent: the connection is not up yet ({state:?}); send once it is Connected"
             ),
             Error::Unsupported(what) => write!(f, "not supported: {what}"),
+            Error::InvalidArgument(what) => write!(f, "invalid argument: {what}"),
         }
     }
 }

@@ -99,6 +99,7 @@ pub use connection::{
     Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
+pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};
 pub use devices::builder::RemoteBuilder;
 pub use devices::button::{
     ButtonChange, ButtonExample, ButtonRemote, ButtonServer, ButtonState, ButtonStates,
@@ -129,3 +130,7 @@ struct ReadmeDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/USING.md")]
 struct UsingDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/IMAGER.md")]
+struct ImagerDoctests;

@@ -44,3 +44,20 @@ pub fn value<T: FromStr>(
     text.parse()
         .map_err(|_| format!("{option} needs {expected}, got {raw:?}").into())
 }
+
+/// The command line with the C++ single-dash spellings of `long_names` (`-notracker`) turned
+/// into their GNU form (`--notracker`), so that both spellings work and lexopt reads them.
+#[allow(dead_code)] // not every program has C++ spellings
+pub fn with_cpp_spellings(long_names: &[&str]) -> Vec<std::ffi::OsString> {
+    std::env::args_os()
+        .skip(1)
+        .map(|a| match a.to_str() {
+            Some(s)
+                if s.starts_with('-') && !s.starts_with("--") && long_names.contains(&&s[1..]) =>
+            {
+                format!("-{s}").into()
+            }
+            _ => a,
+        })
+        .collect()
+}

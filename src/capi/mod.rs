@@ -138,6 +138,7 @@ impl From<Error> for Failure {
             Error::Log(_) | Error::LogNotFound { .. } | Error::LogDamaged(_) => VrpnStatus::Log,
             Error::NotConnected(_) => VrpnStatus::NotConnected,
             Error::Unsupported(_) => VrpnStatus::Unsupported,
+            Error::InvalidArgument(_) => VrpnStatus::InvalidArgument,
         };
         Failure::new(status, e.to_string())
     }

@@ -42,6 +42,9 @@ pub struct Message<'a> {
     /// The payload, without padding.
     pub payload: &'a [u8],
     pub(crate) conn: &'a Connection,
+    /// Read from a peer (or a replayed log), rather than packed on this side or raised by the
+    /// connection itself.
+    pub(crate) from_peer: bool,
 }
 
 impl<'a> Message<'a> {
@@ -50,6 +53,14 @@ impl<'a> Message<'a> {
     /// alive for as long as the handler is registered on it.
     pub fn connection(&self) -> &'a Connection {
         self.conn
+    }
+
+    /// True for a message read from a peer or a replayed log; false for one packed on this
+    /// side (every connection hands its own messages to its local handlers too) and for the
+    /// connection's own events. Forwarders use it to pass on only what came from elsewhere.
+    #[inline]
+    pub fn from_peer(&self) -> bool {
+        self.from_peer
     }
 
     /// When the message arrived here, on the local clock: the time of the `mainloop()` pass
@@ -322,6 +333,7 @@ mod tests {
             type_id: TypeId(3),
             payload: &[],
             conn: &conn,
+            from_peer: true,
         };
         t.dispatch(&msg(1));
         t.dispatch(&msg(2));

@@ -33,6 +33,56 @@ impl Connection {
         Ok(())
     }
 
+    /// Client: asks the server to log this connection (`incoming`: what the server receives
+    /// from us, `outgoing`: what it sends us; "" for none), as C++'s
+    /// `vrpn_get_connection_by_name` remote log names do. The request goes out with the next
+    /// greeting, once: call it before the connection is first made (right after opening it).
+    ///
+    /// The names are the server's to interpret. A C++ server writes them where it runs; a
+    /// server of this crate takes plain file names, written inside a folder its operator named
+    /// (`vrpn_server -logdir DIR`), and closes the connection when it cannot honour them
+    /// (the name exists, it is a path), which is how VRPN tells a client that remote logging
+    /// failed. Without such a folder it refuses with a notice and keeps serving.
+    pub fn request_remote_logging(&self, incoming: &str, outgoing: &str) -> Result<(), Error> {
+        let mut core = self.inner.core.borrow_mut();
+        if !core.session.is_client() {
+            return Err(Error::Unsupported(
+                "remote logging is requested by a client of a network server",
+            ));
+        }
+        let request = crate::proto::RemoteLogRequest {
+            incoming: incoming.to_string(),
+            outgoing: outgoing.to_string(),
+        };
+        core.session.set_remote_log_request(Some(request));
+        Ok(())
+    }
+
+    /// Server: writes the logs clients ask for (remote logging) into `folder`, under the names
+    /// they give when these are plain file names that do not exist yet; other requests close
+    /// the asking client's connection. `None` (the default) refuses every request with a
+    /// notice and keeps serving the client.
+    pub fn set_remote_log_folder(&self, folder: Option<crate::log::LogFolder>) {
+        self.inner
+            .core
+            .borrow_mut()
+            .session
+            .set_remote_log_folder(folder);
+    }
+
+    /// Logs what a client receives into a file already created (a folder's).
+    pub(crate) fn log_incoming_file(&self, file: std::fs::File, path: &std::path::Path) {
+        let sink = crate::log::sink_from_file(file, path);
+        let mut core = self.inner.core.borrow_mut();
+        core.session.set_incoming_log(Some(sink), None);
+    }
+
+    /// Logs what this side sends into a file already created (a folder's).
+    pub(crate) fn log_outgoing_file(&self, file: std::fs::File, path: &std::path::Path) {
+        let sink = crate::log::sink_from_file(file, path);
+        self.inner.core.borrow_mut().session.set_outgoing_log(sink);
+    }
+
     /// Writes all buffered log data now (`vrpn_server -flush` calls it every pass). Otherwise
     /// each `mainloop()` writes a bounded amount and the rest goes out when the connection
     /// closes.

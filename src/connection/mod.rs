@@ -84,8 +84,9 @@ struct Inner {
     /// A remote started its cycle and the connection has not polled it yet (a fresh cycle
     /// has no deadline until its first poll).
     liveness_started: Cell<bool>,
-    /// Senders whose texts the default printer shows.
-    printed: RefCell<Vec<i32>>,
+    /// Senders whose texts the default printer shows (with its handler), or that were muted
+    /// (no handler).
+    printed: RefCell<Vec<(i32, Option<HandlerId>)>>,
 }
 
 /// A VRPN connection handle. Clones share the connection.
@@ -489,6 +490,7 @@ impl Connection {
                 type_id,
                 payload,
                 conn: self,
+                from_peer: false,
             };
             if self.inner.depth.get() > 0 {
                 self.defer(&msg);
@@ -558,6 +560,7 @@ impl Connection {
                         type_id: TypeId(type_id),
                         payload: &scratch,
                         conn: self,
+                        from_peer: false,
                     });
                     self.inner.depth.set(0);
                     *self.inner.deferred_scratch.borrow_mut() = scratch;
@@ -665,6 +668,7 @@ impl Connection {
                         type_id: TypeId(type_id),
                         payload: &scratch[..len],
                         conn: self,
+                        from_peer: true,
                     });
                     self.inner
                         .core
@@ -691,6 +695,7 @@ impl Connection {
                     type_id: TypeId(ev.type_id()),
                     payload: &[],
                     conn: self,
+                    from_peer: false,
                 });
             }
             Delivery::Notice(n) => self.dispatch_notice(n),
@@ -716,21 +721,38 @@ impl Connection {
     /// Prints text messages from `sender` with the default printer (once per connection and
     /// sender; see [`set_text_printer`]).
     pub(crate) fn attach_text_printer(&self, sender: SenderId, text_type: TypeId) {
+        if self
+            .inner
+            .printed
+            .borrow()
+            .iter()
+            .any(|(s, _)| *s == sender.0)
         {
-            let mut printed = self.inner.printed.borrow_mut();
-            if printed.contains(&sender.0) {
-                return;
-            }
-            printed.push(sender.0);
+            return;
         }
         let name = self.sender_name(sender).unwrap_or_default();
-        self.register_handler(text_type, SenderFilter::Only(sender), move |m| {
+        let id = self.register_handler(text_type, SenderFilter::Only(sender), move |m| {
             if let Ok(t) = wire::payload::text::TextMessage::decode(m.payload) {
                 let severity = wire::payload::text::TextSeverity::from_code(t.severity);
                 let text = String::from_utf8_lossy(t.text);
                 printer::print_text(&name, severity, t.level, &text);
             }
         });
+        self.inner.printed.borrow_mut().push((sender.0, Some(id)));
+    }
+
+    /// Stops the default printer from showing text messages from `sender` on this connection
+    /// (C++ `vrpn_System_TextPrinter.remove_object`), now and for remotes opened later.
+    pub fn mute_text_printer(&self, sender: SenderId) {
+        let mut printed = self.inner.printed.borrow_mut();
+        match printed.iter_mut().find(|(s, _)| *s == sender.0) {
+            Some((_, handler)) => {
+                if let Some(id) = handler.take() {
+                    self.inner.handlers.remove(id);
+                }
+            }
+            None => printed.push((sender.0, None)),
+        }
     }
 
     // -------------------------------------------------------------- waiting

@@ -7,13 +7,18 @@ use crate::time::{period_of_rate, Now};
 
 pub mod analog;
 pub mod analog_output;
+pub mod aux_logger;
 pub mod base;
 pub mod builder;
 pub mod button;
 pub mod dial;
 pub mod force;
+pub mod imager;
 pub mod latest;
+pub mod mutex;
+pub mod peer_mutex;
 pub mod poser;
+pub mod shared_object;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
@@ -30,6 +35,9 @@ builder::remote_builder!(
     poser::PoserRemote,
     force::ForceDeviceRemote,
     text_device::TextReceiver,
+    imager::ImagerRemote,
+    imager::ImagerPoseRemote,
+    aux_logger::AuxLoggerRemote,
 );
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest

@@ -25,6 +25,7 @@
 
 mod cursor;
 // The entry codec; what a user needs of it is re-exported here.
+pub mod folder;
 #[doc(hidden)]
 pub mod format;
 pub mod names;
@@ -33,6 +34,7 @@ pub mod replay;
 pub mod tools;
 pub mod writer;
 
+pub use folder::{LogFolder, Refusal};
 pub use format::{
     decode_entry, encode_entry, entry_len, EntryFault, EntryHeader, EntryProblem, EntryWalker,
     LogEntry, SystemEntry, ENTRY_HEADER_LEN, MAX_ENTRY_PAYLOAD,
@@ -53,11 +55,19 @@ pub(crate) fn open_sink(path: &str) -> Result<LogWriter<Box<dyn std::io::Write>>
             offset: 0,
             error,
         })?;
+    Ok(sink_from_file(file, std::path::Path::new(path)))
+}
+
+/// A byte sink over a log file already created (empty) at `path`, with this crate's cookie.
+pub(crate) fn sink_from_file(
+    file: std::fs::File,
+    path: &std::path::Path,
+) -> LogWriter<Box<dyn std::io::Write>> {
     let cookie = crate::wire::Cookie::ours(0).to_bytes();
-    Ok(LogWriter::new(
+    LogWriter::new(
         Box::new(file) as Box<dyn std::io::Write>,
         path,
         &cookie,
         DEFAULT_BUFFER_LEN,
-    ))
+    )
 }

@@ -147,6 +147,8 @@ pub(crate) struct Endpoint {
     pub(crate) clock_pass: Option<ClockPass>,
     /// This peer's incoming log (`vrpn_server -li`: one file per client).
     pub(crate) log_in: Option<LogSink>,
+    /// The logs the peer asked this server to write (remote logging; boxed: rare).
+    pub(crate) requested_logs: Option<Box<super::session::RequestedLogs>>,
     /// Reassembles the TCP stream; made when the handshake completes.
     pub(crate) rx: Option<StreamDecoder>,
     /// Inbound datagrams; made when our UDP socket for this peer is bound.
@@ -215,6 +217,7 @@ impl Endpoint {
             foreign_datagrams: 0,
             udp_source_pinned: false,
             log_in: None,
+            requested_logs: None,
             callback: false,
             clock: None,
             clock_pass: None,
@@ -251,6 +254,11 @@ impl Endpoint {
     pub(crate) fn cookie(&self) -> Option<&[u8; COOKIE_LEN]> {
         (self.phase == Phase::AwaitingCookie && self.cookie_len == COOKIE_LEN)
             .then_some(&self.cookie)
+    }
+
+    /// The peer's cookie once all 24 bytes were read (whatever the phase since).
+    pub(crate) fn greeting_bytes(&self) -> Option<[u8; COOKIE_LEN]> {
+        (self.cookie_len == COOKIE_LEN).then_some(self.cookie)
     }
 
     /// Queues a message with the channel its class of service asks for. Messages packed

@@ -27,7 +27,7 @@ use std::time::Duration;
 use crate::time::TimeVal;
 use crate::wire;
 
-pub use session::Session;
+pub use session::{RemoteLogRequest, Session};
 
 /// What a connection is doing now.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

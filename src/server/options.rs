@@ -28,6 +28,8 @@ pub struct ServerOptions {
     pub warn_only: bool,
     /// Verbose (`-v`): print what is opened, show NORMAL texts too.
     pub verbose: bool,
+    /// Quiet (`-quiet`): no start-up line, only warnings and errors.
+    pub quiet: bool,
     /// Quit when the last client leaves (`-q`).
     pub quit_after_last: bool,
     /// Loop wait policy (`-millisleep`).
@@ -40,6 +42,10 @@ pub struct ServerOptions {
     pub log_out: Option<String>,
     /// Flush logs every pass (`-flush`).
     pub flush_logs: bool,
+    /// Folder for the logs clients ask for (`-logdir DIR`): remote log names sent at connect
+    /// time, and auxiliary loggers whose configuration line names no folder. Without it such
+    /// requests are refused.
+    pub log_dir: Option<String>,
     /// Listen port (default 3883; 0 picks a free one and prints it).
     pub port: u16,
     /// Call clients back at the address their connection request names rather than the
@@ -58,6 +64,7 @@ impl Default for ServerOptions {
             config: "vrpn.cfg".into(),
             warn_only: false,
             verbose: false,
+            quiet: false,
             quit_after_last: false,
             sleep: SleepPolicy::EventDriven {
                 busy_window: Duration::from_millis(2),
@@ -67,6 +74,7 @@ impl Default for ServerOptions {
             log_in: None,
             log_out: None,
             flush_logs: false,
+            log_dir: None,
             port: crate::wire::DEFAULT_PORT,
             callback_to_named_address: false,
             clock_shift: None,
@@ -86,12 +94,13 @@ pub enum ServerCommand {
 }
 
 /// Usage text.
-pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millisleep N] \
-[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-callbacknamed] [-clockshift S] [PORT]
+pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q] [-millisleep N] \
+[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-logdir DIR] [-callbacknamed] [-clockshift S] [PORT]
        vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
   -v              verbose: print each device opened and show every text message
+  -quiet          print only warnings and errors (no start-up line)
   -q              quit when the last client disconnects
   -millisleep N   N > 0: block at most N ms per pass; 0 or -1: spin (100% CPU);
                   default: sleep until a socket or device needs service
@@ -99,6 +108,9 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-q] [-millis
   -li FILE        log incoming messages to FILE
   -lo FILE        log outgoing messages to FILE
   -flush          flush logs on every pass
+  -logdir DIR     write the logs clients ask for (remote log names, auxiliary loggers)
+                  inside DIR, under plain file names that do not exist yet; without it
+                  clients' log requests are refused
   -callbacknamed  call UDP-path clients back at the (numeric) address their request
                   names, not the address it came from (multi-homed clients only)
   -clockshift S   stamp messages as if this host's clock were S seconds ahead (to
@@ -121,6 +133,8 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-f" => o.config = value("-f")?,
             "-warn" => o.warn_only = true,
             "-v" => o.verbose = true,
+            "-quiet" => o.quiet = true,
+            "-logdir" => o.log_dir = Some(value("-logdir")?),
             "-q" => o.quit_after_last = true,
             "-flush" => o.flush_logs = true,
             "-callbacknamed" => o.callback_to_named_address = true,
@@ -202,6 +216,8 @@ mod tests {
         assert!(o.flush_logs);
         assert!(!o.callback_to_named_address);
         assert!(serve("-callbacknamed").callback_to_named_address);
+        assert!(serve("-quiet").quiet);
+        assert_eq!(serve("-logdir logs").log_dir.as_deref(), Some("logs"));
         assert_eq!(serve("-clockshift -3600.5").clock_shift, Some(-3600.5));
         assert!(parse_args(args("-clockshift soon")).is_err());
         assert!(

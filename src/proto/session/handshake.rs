@@ -24,13 +24,14 @@ impl Session {
     pub(super) fn start_greeting(&mut self, now: Now, id: PeerId, local: SocketAddrV4) {
         self.timeouts_changed();
         let timeout = self.limits.handshake_timeout;
+        let log_mode = self.greeting_log_mode();
         let Some(p) = self.peer_mut(id) else {
             return;
         };
         p.phase = Phase::AwaitingCookie;
         p.local = Some(local);
         p.deadline = Some(now.mono + timeout);
-        let _ = p.tx.push_raw(&Cookie::ours(0).to_bytes());
+        let _ = p.tx.push_raw(&Cookie::ours(log_mode).to_bytes());
     }
 
     /// The peer's 24 bytes are in: accept or drop it.
@@ -90,7 +91,10 @@ impl Session {
         p.phase = Phase::Describing;
         p.deadline = None;
         p.rx = Some(StreamDecoder::default());
-        if p.tcp_only {
+        let tcp_only = p.tcp_only;
+        // A client's request to be logged goes first, as C++ sends it.
+        self.send_remote_log_request(now, id);
+        if tcp_only {
             self.finish_handshake(now, id, None);
         } else {
             self.io.push_back(IoRequest::BindUdp { peer: id });

@@ -24,6 +24,15 @@ impl Session {
         }
     }
 
+    /// A message this side packs: into the outgoing log and the logs peers asked for.
+    #[inline(never)]
+    pub(crate) fn log_packed(&mut self, type_id: i32, sender: i32, time: TimeVal, payload: &[u8]) {
+        if self.logs.outgoing.is_some() {
+            self.log_outgoing(type_id, sender, time, payload);
+        }
+        self.log_to_requested(type_id, sender, time, payload);
+    }
+
     pub(crate) fn log_error(&mut self, e: String) {
         if !self.logs.failed {
             self.logs.failed = true;
@@ -72,12 +81,13 @@ impl Session {
             .incoming
             .iter_mut()
             .chain(self.logs.outgoing.iter_mut())
-            .chain(
-                self.peers
-                    .iter_mut()
-                    .flatten()
-                    .filter_map(|p| p.log_in.as_mut()),
-            )
+            .chain(self.peers.iter_mut().flatten().flat_map(|p| {
+                let requested = p
+                    .requested_logs
+                    .as_deref_mut()
+                    .map(|r| r.incoming.iter_mut().chain(r.outgoing.iter_mut()));
+                p.log_in.iter_mut().chain(requested.into_iter().flatten())
+            }))
     }
 
     /// Writes every buffered log byte.
@@ -100,6 +110,7 @@ impl Session {
         self.logs.per_peer = None;
         for p in self.peers.iter_mut().flatten() {
             p.log_in = None;
+            p.requested_logs = None;
         }
         r
     }

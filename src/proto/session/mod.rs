@@ -29,7 +29,11 @@ mod input;
 mod logs;
 mod output;
 mod receive;
+mod remote_logs;
 mod send;
+
+pub use remote_logs::RemoteLogRequest;
+pub(crate) use remote_logs::RequestedLogs;
 
 use std::collections::VecDeque;
 use std::net::{Ipv4Addr, SocketAddrV4};
@@ -74,6 +78,8 @@ pub(crate) struct Logs {
     pub(crate) failed: bool,
     /// Some log was ever opened (lets a pass without logs skip the flush walk).
     pub(crate) any: bool,
+    /// Server: where logs that peers ask for are written (`None`: such requests are refused).
+    pub(crate) remote_folder: Option<crate::log::folder::LogFolder>,
 }
 
 /// The local ids of the clock-synchronisation names, registered when the first peer connects
@@ -134,6 +140,8 @@ pub struct Session {
     pub(crate) clock_ids: Option<ClockIds>,
     /// A peer described the clock-synchronisation names (register ours before its queries).
     pub(crate) clock_names_seen: bool,
+    /// Client: the logs to ask the server for at the next connect.
+    pub(crate) remote_log_request: Option<RemoteLogRequest>,
 }
 
 impl Session {
@@ -167,6 +175,7 @@ impl Session {
             timeout_cache: std::cell::Cell::new(None),
             clock_ids: None,
             clock_names_seen: false,
+            remote_log_request: None,
         }
     }
 

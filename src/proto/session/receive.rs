@@ -356,12 +356,15 @@ impl Session {
             if let Some(w) = p.log_in.as_mut().or(logs.incoming.as_mut()) {
                 let _ = w.log_message(h.type_id, h.sender, h.time, &scratch[..len]);
             }
+            if let Some(w) = p.requested_logs.as_mut().and_then(|r| r.incoming.as_mut()) {
+                let _ = w.log_message(h.type_id, h.sender, h.time, &scratch[..len]);
+            }
         }
         if len > limits.max_message_payload {
             return oversized(refusal, &p.label, len, limits.max_message_payload);
         }
         if h.type_id < 0 {
-            return self.handle_system_message(slot, h, len, via);
+            return self.handle_system_message(slot, h, len, via, now);
         }
         self.handle_user_message(slot, h, len, via, now)
     }
@@ -374,12 +377,19 @@ impl Session {
         h: wire::Header,
         len: usize,
         via: Via,
+        now: &dyn TimeSource,
     ) -> Option<Delivery> {
         if matches!(
             h.type_id,
             system::SENDER_DESCRIPTION | system::TYPE_DESCRIPTION
         ) {
             return self.handle_description(slot, h, len);
+        }
+        if h.type_id == system::LOG_DESCRIPTION {
+            if via != Via::Log {
+                self.handle_log_request(slot, h.sender, len, now.now());
+            }
+            return None;
         }
         let Session {
             peers,
@@ -413,22 +423,6 @@ impl Session {
                 let addr = std::net::SocketAddrV4::new(ip, port as u16);
                 let id = p.id;
                 self.io.push_back(IoRequest::OpenUdpOut { peer: id, addr });
-                None
-            }
-            system::LOG_DESCRIPTION => {
-                // C++ servers open the named files on the server machine. An unauthenticated
-                // peer choosing paths we write to is a hazard, so the request is refused.
-                if let Ok(d) = system::decode_log_description(payload) {
-                    let text = format!(
-                        "{} asked this side to log (incoming {:?}, outgoing {:?}); remote \
-                         logging requests are refused: log locally with -li/-lo instead",
-                        p.label, d.incoming, d.outgoing
-                    );
-                    return Some(Delivery::Notice(Notice {
-                        severity: Severity::Warning,
-                        text,
-                    }));
-                }
                 None
             }
             system::DISCONNECT => {

@@ -95,8 +95,8 @@ impl Session {
         class_of_service: u32,
     ) -> bool {
         // Inline: an in-process connection has no log and no peer, and this is all it pays.
-        if self.logs.outgoing.is_some() {
-            self.log_outgoing(type_id, sender, time, payload);
+        if self.logs.any {
+            self.log_packed(type_id, sender, time, payload);
         }
         if !self.peers.is_empty() {
             self.pack_to_peers(time, sender, type_id, payload, class_of_service);

@@ -51,7 +51,20 @@ macro_rules! scalar_field {
     };
 }
 
+impl Field for u8 {
+    const SIZE: usize = 1;
+    #[inline]
+    fn read(buf: &[u8]) -> Self {
+        buf[0]
+    }
+    #[inline]
+    fn write(&self, buf: &mut [u8]) {
+        buf[0] = *self;
+    }
+}
+
 scalar_field!(i16, 2, read_i16, write_i16);
+scalar_field!(u16, 2, read_u16, write_u16);
 scalar_field!(i32, 4, read_i32, write_i32);
 scalar_field!(u32, 4, read_u32, write_u32);
 scalar_field!(f32, 4, read_f32, write_f32);
@@ -163,11 +176,19 @@ macro_rules! fixed_payload {
 
 pub mod analog;
 pub mod analog_output;
+pub mod aux_logger;
 pub mod button;
 pub mod clock;
 pub mod dial;
+pub mod fixed_text;
 pub mod force;
+pub mod function_generator;
+pub mod imager;
+pub mod mutex;
 pub mod poser;
+pub mod redundant;
+pub mod shared_object;
+pub mod sound;
 pub mod text;
 pub mod tracker;
 
