@@ -299,11 +299,11 @@ mod tests {
         assert_eq!(bytes.len(), 24 + 10_000 * 28);
         let r = LogReader::from_bytes(bytes, "mem").unwrap();
         let mut entries = r.entries();
-        let mut i = 0;
+        let mut i = 0i32;
         while let Some(e) = entries.next_entry() {
             let e = e.unwrap();
-            assert_eq!(e.payload, &(i as i32).to_be_bytes());
-            assert_eq!(e.time(), TimeVal::new(7, i as i64));
+            assert_eq!(e.payload, &i.to_be_bytes());
+            assert_eq!(e.time(), TimeVal::new(7, i64::from(i)));
             i += 1;
         }
         assert_eq!(r.entries().count_whole(), 10_000);

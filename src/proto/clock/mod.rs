@@ -590,8 +590,9 @@ impl ClockSync {
 
     /// Whether a quick round may start at `at` ([`QUICK_ROUND_GAP`] since the last one).
     pub(super) fn quick_round_allowed(&self, at: Instant) -> bool {
-        self.last_quick_round
-            .is_none_or(|last| at.saturating_duration_since(last) >= QUICK_ROUND_GAP)
+        self.last_quick_round.map_or(true, |last| {
+            at.saturating_duration_since(last) >= QUICK_ROUND_GAP
+        })
     }
 
     pub(super) fn start_quick_round(&mut self, at: Instant) {

@@ -11,10 +11,11 @@ pub(super) fn micros(t: TimeVal) -> i128 {
 }
 
 /// How long a [`Translation`] may be reused before it is worked out again (see
-/// [`ClockSync::translation_until`]).
+/// [`ClockSync::translation_until`](super::ClockSync::translation_until)).
 pub const TRANSLATION_REUSE: Duration = Duration::from_millis(250);
 
-/// Peer-to-local time translation fixed at one moment (see [`ClockSync::translation`]).
+/// Peer-to-local time translation fixed at one moment (see
+/// [`ClockSync::translation`](super::ClockSync::translation)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Translation {
     /// The offset at that moment, in microseconds, and split into seconds and microseconds
