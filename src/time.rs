@@ -107,13 +107,15 @@ pub fn checked_duration(secs: f64) -> Option<Duration> {
 }
 
 /// The period of `rate` events per second, or `None` unless the rate is finite and at least
-/// one per [`MAX_PERIOD`]. A very high rate gives a zero period (due at every pass).
+/// one per [`MAX_PERIOD`] (within a millionth, so that `1e-9` read in single precision
+/// counts). A very high rate gives a zero period (due at every pass).
 pub fn period_of_rate(rate: f64) -> Option<Duration> {
-    if rate.is_finite() && rate > 0.0 {
-        checked_duration(1.0 / rate)
-    } else {
-        None
+    if !(rate.is_finite() && rate > 0.0) {
+        return None;
     }
+    let period = 1.0 / rate;
+    let longest = MAX_PERIOD.as_secs_f64();
+    (period <= longest * (1.0 + 1e-6)).then(|| Duration::from_secs_f64(period.min(longest)))
 }
 
 /// `at + d`, or the latest instant that can be represented on the way there (for timeouts
@@ -124,8 +126,9 @@ pub fn instant_after(at: Instant, d: Duration) -> Instant {
         .unwrap_or(at)
 }
 
-/// Microseconds a [`TimeVal`] may be away from the epoch (2^62, about 146,000 years).
-pub const MAX_MICROS: i64 = 1 << 62;
+/// Microseconds a [`TimeVal`] may be away from the epoch (2^62 − 1, about 146,000 years): the
+/// difference of any two such times fits an `i64`.
+pub const MAX_MICROS: i64 = (1 << 62) - 1;
 
 /// A point in time as VRPN messages carry it.
 ///
@@ -143,13 +146,13 @@ impl TimeVal {
     /// The zero time (what C++ devices stamp before their first report).
     pub const ZERO: TimeVal = TimeVal { sec: 0, usec: 0 };
 
-    /// The latest time: 2^62 µs after the epoch.
+    /// The latest time: [`MAX_MICROS`] after the epoch.
     pub const MAX: TimeVal = TimeVal {
         sec: MAX_MICROS / 1_000_000,
         usec: MAX_MICROS % 1_000_000,
     };
 
-    /// The earliest time: 2^62 µs before the epoch.
+    /// The earliest time: [`MAX_MICROS`] before the epoch.
     pub const MIN: TimeVal = TimeVal {
         sec: -(MAX_MICROS / 1_000_000) - 1,
         usec: 1_000_000 - MAX_MICROS % 1_000_000,
@@ -232,7 +235,7 @@ impl TimeVal {
 
     /// `self - earlier` in seconds (negative when `earlier` is later).
     pub fn seconds_since(&self, earlier: TimeVal) -> f64 {
-        (self.as_micros() - earlier.as_micros()) as f64 * 1e-6
+        self.as_micros().saturating_sub(earlier.as_micros()) as f64 * 1e-6
     }
 
     /// Adds float seconds (rounded to the microsecond), saturating; NaN adds nothing.
@@ -368,12 +371,17 @@ mod tests {
     fn float_durations_are_checked() {
         assert_eq!(checked_duration(0.25), Some(Duration::from_millis(250)));
         assert_eq!(checked_duration(0.0), Some(Duration::ZERO));
-        assert_eq!(checked_duration(1e9), Some(MAX_PERIOD));
+        assert_eq!(checked_duration(1e9), Some(Duration::from_secs_f64(1e9)));
         for bad in [-1e-9, 1e9 + 1.0, 1e30, f64::INFINITY, f64::NAN, -0.0 - 1.0] {
             assert_eq!(checked_duration(bad), None, "{bad}");
         }
         assert_eq!(period_of_rate(4.0), Some(Duration::from_millis(250)));
-        assert_eq!(period_of_rate(1e-9), Some(MAX_PERIOD));
+        let about_max = |d: Option<Duration>| {
+            d.is_some_and(|d| d.max(MAX_PERIOD) - d.min(MAX_PERIOD) < Duration::from_micros(1))
+        };
+        assert!(about_max(period_of_rate(1e-9)));
+        let single = f64::from(1e-9f32); // a hair below 1e-9
+        assert!(about_max(period_of_rate(single)));
         assert_eq!(period_of_rate(1e300), Some(Duration::ZERO));
         for bad in [1e-20, 5e-20, 9.9e-10, 0.0, -1.0, f64::INFINITY, f64::NAN] {
             assert_eq!(period_of_rate(bad), None, "{bad}");

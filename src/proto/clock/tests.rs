@@ -519,7 +519,7 @@ fn offsets_beyond_max_offset_and_peer_times_a_header_cannot_carry_are_absurd() {
         }
         .normalised(),
         ClockSyncConfig {
-            max_offset: Duration::from_micros(1 << 62),
+            max_offset: Duration::from_micros(crate::time::MAX_MICROS as u64),
             step_samples: MAX_STEP_SAMPLES as u32,
             ..ClockSyncConfig::default()
         }
