@@ -48,8 +48,8 @@ use vrpn::drivers::joylin::event::Kind;
 use vrpn::drivers::joylin::sim::{self as joy_sim, JoystickSim};
 use vrpn::drivers::magellan::record::{axis_value, RESET_NULL_RADIUS};
 use vrpn::drivers::magellan::sim::{self as magellan_sim, MagellanSim, Sent};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::Now;
 
 use super::{fastrak_model, flock_model, SimThread};

@@ -42,10 +42,10 @@ use nix::poll::{poll, PollFd, PollFlags};
 use vrpn::drivers::fastrak::record::METRES_PER_INCH;
 use vrpn::drivers::fastrak::sim::{self as fastrak_sim, FastrakSim};
 use vrpn::drivers::flock::sim::{self as flock_sim, FlockSim};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
 use vrpn::server::config::parse_str;
 use vrpn::server::{build_devices, ServerLoop, SleepPolicy};
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::{Connection, Now, TimeVal, TrackerRemote};
 
 /// Records measured by `first-byte` (override with `FIRST_BYTE_RECORDS`).
@@ -206,7 +206,7 @@ impl ServerThread {
             let started = Instant::now();
             let conn = Connection::server(Some(std::net::Ipv4Addr::LOCALHOST), 0).expect("server");
             let entries = parse_str(&cfg, "bench.cfg").expect("config");
-            let devices = build_devices(&entries, &conn, false, |_| {}).expect("devices");
+            let devices = build_devices(&entries, &conn, false, None, |_| {}).expect("devices");
             tx.send((conn.local_port().expect("a port"), started))
                 .expect("the bench waits");
             let sleep = SleepPolicy::EventDriven {

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use vrpn::proto::clock::{
     ClockSync, ClockSyncConfig, ClockSyncStats, Estimate, Query, Reply, ReplyOutcome,
 };
-use vrpn::serial::testing::Rng;
+use vrpn::sim::Rng;
 use vrpn::wire::{padded_len, HEADER_LEN};
 use vrpn::{Now, TimeVal};
 

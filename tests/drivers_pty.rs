@@ -12,8 +12,8 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::{Now, TrackerRemote};
 
 /// Runs a device model on a pseudo-terminal in a thread until dropped.

@@ -7,12 +7,11 @@ use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::drivers::dyna::sim::{DynaSim, SimConfig};
-use vrpn::drivers::dyna::DynaDriver;
 use vrpn::drivers::joylin::sim::{JoystickSim, SimConfig as JoySimConfig};
 use vrpn::drivers::joylin::JoylinDriver;
-use vrpn::serial::testing::VirtualLine;
+use vrpn::sim::VirtualLine;
 
-use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::server::config::parse_one;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, TrackerRemote};
 
 #[path = "common/counted_driver.rs"]
@@ -22,12 +21,10 @@ use counted_driver::{start, Counted, COUNT};
 #[test]
 fn dynasight_streams_without_allocating() {
     let text = "vrpn_Tracker_Dyna Dyna0 1 /dev/ttyS0 19200\n";
-    let DeviceConfig::Dyna(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
-        panic!("not a Dyna entry");
-    };
+    let cfg: vrpn::drivers::dyna::Dyna = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = DynaDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let tracker = TrackerRemote::on_connection("Dyna0", &conn).unwrap();
     let poses = Rc::new(Cell::new(0u64));
     let p = poses.clone();
@@ -56,7 +53,7 @@ fn dynasight_streams_without_allocating() {
     let allocations = COUNT.with(Cell::get);
     let poses = poses.get() - before;
     assert!(poses >= 295, "{poses} poses");
-    assert!(line.driver.0.skipped_bytes() >= 20);
+    assert!(line.driver.0.stats().skipped_bytes >= 20);
     assert_eq!(
         allocations, 0,
         "allocations while streaming {poses} records"
@@ -66,9 +63,7 @@ fn dynasight_streams_without_allocating() {
 #[test]
 fn joystick_streams_without_allocating() {
     let text = "vrpn_Joylin Joy0 /dev/input/js0\n";
-    let DeviceConfig::Joylin(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
-        panic!("not a Joylin entry");
-    };
+    let cfg: vrpn::drivers::joylin::Joylin = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let driver = JoylinDriver::new(&cfg, &conn).unwrap();

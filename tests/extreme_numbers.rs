@@ -124,34 +124,28 @@ fn the_library_schedules_any_float_without_panicking() {
     }
     // The fly trackers take their rate from a configuration built in code.
     let analog = vrpn::devices::analog::AnalogExample::new("FlyIn", &conn, 2, 10.0).unwrap();
-    let mut fly_cfg = match vrpn::server::config::parse_str(
+    let mut fly_cfg = vrpn::server::config::parse_str(
         "vrpn_Tracker_AnalogFly F 10 absolute\nX *FlyIn 0 0 0 1 1\n\n",
         "inline.cfg",
     )
-    .unwrap()
-    .remove(0)
-    .config
-    {
-        vrpn::server::config::DeviceConfig::AnalogFly(c) => c,
-        other => panic!("{other:?}"),
-    };
+    .unwrap()[0]
+        .spec::<vrpn::layered::config::AnalogFly>()
+        .unwrap()
+        .clone();
     fly_cfg.update_rate = 1e-30;
     let mut fly = vrpn::layered::TrackerAnalogFly::new(&fly_cfg, &conn).unwrap();
     let _ = &analog;
     fly.mainloop(now);
     fly.mainloop(now.plus(Duration::from_secs(1)));
     let _ = fly.next_deadline();
-    let mut bfly_cfg = match vrpn::server::config::parse_str(
+    let mut bfly_cfg = vrpn::server::config::parse_str(
         "vrpn_Tracker_ButtonFly G 10\nabsolute *FlyB 0 0 0 0 0 0 0\nend\n",
         "inline.cfg",
     )
-    .unwrap()
-    .remove(0)
-    .config
-    {
-        vrpn::server::config::DeviceConfig::ButtonFly(c) => c,
-        other => panic!("{other:?}"),
-    };
+    .unwrap()[0]
+        .spec::<vrpn::layered::config::ButtonFly>()
+        .unwrap()
+        .clone();
     bfly_cfg.update_rate = 1e-30;
     let _buttons = vrpn::devices::button::ButtonExample::new("FlyB", &conn, 1, 10.0).unwrap();
     let mut bfly = vrpn::layered::TrackerButtonFly::new(&bfly_cfg, &conn).unwrap();

@@ -9,9 +9,9 @@ use std::time::{Duration, Instant};
 
 use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig};
 use vrpn::drivers::fastrak::FastrakDriver;
-use vrpn::serial::testing::VirtualLine;
 use vrpn::serial::{PortKind, PortOps, SerialDriver};
-use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::server::config::parse_one;
+use vrpn::sim::VirtualLine;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, Now, TimeVal, TrackerRemote};
 
 struct Counting;
@@ -88,9 +88,7 @@ fn streaming_records_allocates_nothing() {
     let text = "vrpn_Tracker_Fastrak Isense900 /dev/ttyS1 115200 IS900time /\n\
                 Wand Wand0 0 -1.0 0.0 0.0 1.0 -1.0 0.0 0.0 1.0 /\n\
                 Stylus Stylus0 2\n";
-    let DeviceConfig::Fastrak(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
-        panic!("not a Fastrak entry");
-    };
+    let cfg: vrpn::drivers::fastrak::config::Fastrak = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let driver = FastrakDriver::new(&cfg, &conn).unwrap();

@@ -8,9 +8,9 @@ use std::time::Duration;
 
 use vrpn::drivers::flock::sim::{FlockSim, SimConfig};
 use vrpn::drivers::flock::{FlockDriver, FlockParallelPort};
-use vrpn::serial::testing::{VirtualLine, VirtualLines};
+use vrpn::sim::{VirtualLine, VirtualLines};
 
-use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::server::config::parse_one;
 use vrpn::{Connection, TrackerRemote};
 
 #[path = "common/counted_driver.rs"]
@@ -27,9 +27,7 @@ fn pose_counter(remote: &TrackerRemote) -> Rc<Cell<u64>> {
 #[test]
 fn one_line_flock_streams_without_allocating() {
     let text = "vrpn_Tracker_Flock Tracker0 4 /dev/ttyS0 115200 1\n";
-    let DeviceConfig::Flock(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
-        panic!("not a Flock entry");
-    };
+    let cfg: vrpn::drivers::flock::Flock = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let driver = FlockDriver::new(&cfg, &conn).unwrap();
@@ -66,10 +64,7 @@ fn one_line_flock_streams_without_allocating() {
 #[test]
 fn parallel_flock_streams_without_allocating() {
     let text = "vrpn_Tracker_Flock_Parallel Tracker0 3 /dev/m 38400 0 /dev/a /dev/b /dev/c\n";
-    let DeviceConfig::FlockParallel(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config
-    else {
-        panic!("not a Flock_Parallel entry");
-    };
+    let cfg: vrpn::drivers::flock::FlockParallel = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let ports = FlockParallelPort::new_group(&cfg, &conn).unwrap();

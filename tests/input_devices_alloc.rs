@@ -11,9 +11,9 @@ use vrpn::drivers::cerealbox::sim::{self as cereal, CerealSim};
 use vrpn::drivers::cerealbox::CerealBoxDriver;
 use vrpn::drivers::magellan::sim::{self as magellan, MagellanSim};
 use vrpn::drivers::magellan::MagellanDriver;
-use vrpn::serial::testing::VirtualLine;
+use vrpn::sim::VirtualLine;
 
-use vrpn::server::config::{parse_str, DeviceConfig};
+use vrpn::server::config::parse_one;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote};
 
 #[path = "common/counted_driver.rs"]
@@ -28,9 +28,7 @@ fn counter() -> (Rc<Cell<u64>>, Rc<Cell<u64>>) {
 #[test]
 fn magellan_streams_without_allocating() {
     let text = "vrpn_Magellan Magellan0 /dev/ttyS0 9600\n";
-    let DeviceConfig::Magellan(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config else {
-        panic!("not a Magellan entry");
-    };
+    let cfg: vrpn::drivers::magellan::Magellan = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let driver = MagellanDriver::new(&cfg, &conn).unwrap();
@@ -81,10 +79,7 @@ fn magellan_streams_without_allocating() {
 #[test]
 fn cerealbox_streams_without_allocating() {
     let text = "vrpn_CerealBox Cereal0 /dev/ttyS0 19200 24 8 8\n";
-    let DeviceConfig::CerealBox(cfg) = parse_str(text, "alloc.cfg").unwrap().remove(0).config
-    else {
-        panic!("not a CerealBox entry");
-    };
+    let cfg: vrpn::drivers::cerealbox::CerealBox = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
     let driver = CerealBoxDriver::new(&cfg, &conn).unwrap();

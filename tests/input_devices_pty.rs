@@ -21,8 +21,8 @@ use vrpn::drivers::cerealbox::record::revolutions;
 use vrpn::drivers::cerealbox::sim::{self as cereal, CerealSim};
 use vrpn::drivers::magellan::record::{axis_value, RESET_NULL_RADIUS};
 use vrpn::drivers::magellan::sim::{self as magellan, MagellanSim, Sent};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote, Now, SenderFilter};
 
 /// Runs a device model on a pseudo-terminal in a thread until dropped.

@@ -8,8 +8,9 @@ use std::net::Ipv4Addr;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use vrpn::layered::config::{AnalogFly, ButtonFly};
 use vrpn::server::build_devices;
-use vrpn::server::config::{parse_str, AnalogFly, ButtonFly, DeviceConfig};
+use vrpn::server::config::{parse_one, parse_str};
 use vrpn::{
     AnalogRemote, AnalogServer, ButtonServer, Connection, TimeVal, TrackerAnalogFly,
     TrackerButtonFly, TrackerRemote,
@@ -21,24 +22,14 @@ const EPS: f64 = 1e-12;
 /// A pose as a client saw it: (time, pos, quat xyzw).
 type Seen = (TimeVal, [f64; 3], [f64; 4]);
 
-fn config(text: &str) -> DeviceConfig {
-    let mut entries = parse_str(text, "vrpn.cfg").unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(entries.len(), 1);
-    entries.remove(0).config
-}
-
 fn analog_fly_cfg(text: &str) -> AnalogFly {
-    match config(text) {
-        DeviceConfig::AnalogFly(c) => *c,
-        other => panic!("{other:?}"),
-    }
+    assert_eq!(parse_str(text, "vrpn.cfg").unwrap().len(), 1);
+    parse_one(text)
 }
 
 fn button_fly_cfg(text: &str) -> ButtonFly {
-    match config(text) {
-        DeviceConfig::ButtonFly(c) => c,
-        other => panic!("{other:?}"),
-    }
+    assert_eq!(parse_str(text, "vrpn.cfg").unwrap().len(), 1);
+    parse_one(text)
 }
 
 /// A client of `name` on `conn` recording every pose.
@@ -506,7 +497,7 @@ fn config_round_trip_with_local_and_remote_sources() {
          end\n"
     );
     let entries = parse_str(&cfg, "vrpn.cfg").unwrap();
-    let mut devices = build_devices(&entries, &srv_b, false, |_| {}).unwrap();
+    let mut devices = build_devices(&entries, &srv_b, false, None, |_| {}).unwrap();
     let names: Vec<_> = devices.iter().map(|d| d.name().to_string()).collect();
     assert_eq!(names, ["FlyA", "FlyB", "BFly"]);
 

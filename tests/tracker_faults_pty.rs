@@ -20,8 +20,8 @@ use vrpn::drivers::fastrak::record::METRES_PER_INCH;
 use vrpn::drivers::fastrak::sim::{self as fastrak_sim, FastrakSim, SimConfig as FastrakConfig};
 use vrpn::drivers::flock::record::Transmitter;
 use vrpn::drivers::flock::sim::{self as flock_sim, FlockSim, SimConfig as FlockConfig};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::{Now, TextReceiver, TrackerPose, TrackerRemote};
 
 /// A device model that puts queued garbage on the line, one piece per idle gap: only when

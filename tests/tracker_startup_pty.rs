@@ -19,8 +19,8 @@ use std::time::{Duration, Instant};
 
 use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig as FastrakConfig};
 use vrpn::drivers::flock::sim::{FlockSim, SimConfig as FlockConfig};
-use vrpn::serial::pty::PtyDevice;
-use vrpn::serial::testing::DeviceModel;
+use vrpn::sim::DeviceModel;
+use vrpn::sim::PtyDevice;
 use vrpn::{AnalogRemote, ButtonRemote, Now, TextReceiver, TrackerPose, TrackerRemote};
 
 /// The slowest start-up accepted: well under C++'s fastest (7.2 s for a Fastrak).

@@ -1,5 +1,5 @@
 //! BG Systems CerealBox on a serial line: a sans-IO [`SerialDriver`] and a device simulator
-//! ([`sim`]).
+//! (`sim`, with the `sim` feature).
 //!
 //! # Configuration line served
 //!
@@ -46,9 +46,11 @@
 //! * Reset problems and the box type are announced by text messages instead of lines on the
 //!   server's standard output and error.
 
+pub mod config;
 pub mod framer;
 pub mod record;
 pub mod reset;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 
 #[cfg(test)]
@@ -59,12 +61,21 @@ use std::time::{Duration, Instant};
 use self::framer::{Framed, Framer, Problem, Skipped};
 use self::record::{revolutions, Layout, REQUEST};
 use self::reset::{Failure, Progress, ResetSequence};
-use super::stack_text::{with_text, Shown};
 use crate::devices::text::TextSeverity;
+use crate::driver::registry::Driver;
+use crate::driver::text::{with_text, Shown};
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::server::config;
 use crate::time::{Now, TimeVal};
 use crate::{AnalogServer, ButtonServer, Connection, DialServer, Error};
+
+pub use self::config::CerealBox;
+
+/// The registry entry: `vrpn_CerealBox`.
+pub static DRIVER: Driver = Driver {
+    keywords: &["vrpn_CerealBox"],
+    parse: config::parse,
+    hints: &[],
+};
 
 /// Longest time without a good record before the box is reset (as C++).
 pub const WATCHDOG: Duration = Duration::from_secs(2);
@@ -107,7 +118,7 @@ pub struct CerealBoxDriver {
 impl CerealBoxDriver {
     /// The driver for a `vrpn_CerealBox` entry, with its Analog, Button and Dial served on
     /// `conn`.
-    pub fn new(cfg: &config::CerealBox, conn: &Connection) -> Result<CerealBoxDriver, Error> {
+    pub fn new(cfg: &CerealBox, conn: &Connection) -> Result<CerealBoxDriver, Error> {
         if cfg.buttons > config::CerealBox::MAX_BUTTONS
             || cfg.analogs > config::CerealBox::MAX_ANALOGS
             || cfg.encoders > config::CerealBox::MAX_ENCODERS

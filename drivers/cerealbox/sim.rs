@@ -16,7 +16,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::{Layout, BANNER_LEN, BANNER_PREFIX, LF, MAX_RECORD};
-use crate::serial::testing::DeviceModel;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// Records kept in [`CerealSim::log`].

@@ -7,16 +7,17 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config;
 use super::record::{revolutions, Layout};
 use super::reset::RETRY_PAUSE;
 use super::sim::{analog, buttons, encoder, CerealSim, SentRecord, SimConfig};
 use super::{CerealBoxDriver, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
 use crate::serial::SerialDriver;
-use crate::server::config::{self, parse_str, DeviceConfig};
+use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
+use crate::sim::VirtualLine;
 use crate::{AnalogRemote, ButtonRemote, Connection, DialRemote, Now, SenderFilter, TimeVal};
 
 type Line = VirtualLine<CerealBoxDriver, CerealSim>;
@@ -44,10 +45,7 @@ impl Event {
 }
 
 fn cereal_cfg(text: &str) -> config::CerealBox {
-    match parse_str(text, "test.cfg").unwrap().remove(0).config {
-        DeviceConfig::CerealBox(c) => c,
-        other => panic!("not a CerealBox entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 struct Rig {
@@ -427,7 +425,7 @@ fn every_variant_parses_and_builds() {
         assert_eq!(d.port(), "/dev/ttyUSB0");
         let entries = parse_str(&text, "test.cfg").unwrap();
         let mut opened = Vec::new();
-        let devices = build_devices(&entries, &Connection::new_loopback(), false, |n| {
+        let devices = build_devices(&entries, &Connection::new_loopback(), false, None, |n| {
             if let BuildNote::Opened { name, .. } = n {
                 opened.push(name.to_owned());
             }

@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 
 use super::record::{encode, RECORD_LEN};
 use super::reset::STATUS_REQUEST;
-use crate::serial::testing::DeviceModel;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// How the status request is answered.

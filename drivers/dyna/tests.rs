@@ -6,26 +6,31 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config::Dyna;
 use super::reset::{CONTINUOUS, QUIET, STATUS_LIMIT, STATUS_REQUEST, STOP, STOP_LIMIT};
 use super::sim::{DynaSim, SentRecord, SimConfig, StatusReply};
-use super::{DynaDriver, RETRY_DELAY, WATCHDOG};
+use super::{DynaProtocol, RETRY_DELAY};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
+use crate::driver::{Lifecycle, Supervision};
 use crate::serial::{PortKind, PortSettings, SerialDriver};
-use crate::server::config::{self, parse_str, DeviceConfig};
+use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
+use crate::sim::VirtualLine;
 use crate::{Connection, Now, SenderFilter, TimeVal, TrackerPose, TrackerRemote};
 
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 
 const LINE: &str = "vrpn_Tracker_Dyna Dyna0 1 /dev/ttyS0 19200\n";
 
-fn dyna_cfg(text: &str) -> config::Dyna {
-    match parse_str(text, "test.cfg").unwrap().remove(0).config {
-        DeviceConfig::Dyna(d) => d,
-        other => panic!("not a Dyna entry: {other:?}"),
-    }
+/// The watchdog every tracker has.
+const WATCHDOG: Duration = match Supervision::TRACKER.watchdog {
+    Some(d) => d,
+    None => Duration::ZERO,
+};
+
+fn dyna_cfg(text: &str) -> Dyna {
+    parse_one(text)
 }
 
 fn collect_texts(conn: &Connection, name: &str) -> Shared<(TextSeverity, String)> {
@@ -42,7 +47,7 @@ fn collect_texts(conn: &Connection, name: &str) -> Shared<(TextSeverity, String)
 }
 
 struct Rig {
-    line: VirtualLine<DynaDriver, DynaSim>,
+    line: VirtualLine<Lifecycle<DynaProtocol>, DynaSim>,
     start: Now,
     poses: Shared<TrackerPose>,
     texts: Shared<(TextSeverity, String)>,
@@ -54,7 +59,7 @@ fn rig(cfg_text: &str, tweak: impl FnOnce(&mut SimConfig), seed: u64) -> Rig {
     set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg = dyna_cfg(cfg_text);
     let conn = Connection::new_loopback();
-    let driver = DynaDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let remote = TrackerRemote::on_connection(&cfg.name, &conn).unwrap();
     let poses: Shared<TrackerPose> = Rc::default();
     let p = poses.clone();
@@ -147,12 +152,12 @@ impl Rig {
 fn port_settings_and_identity() {
     let r = rig("vrpn_Tracker_Dyna Dyna1 3 /dev/ttyUSB0 9600\n", |_| {}, 1);
     assert_eq!(r.line.driver.name(), "Dyna1");
-    assert_eq!(r.line.driver.port(), "/dev/ttyUSB0");
+    assert_eq!(r.line.driver.protocol().port(), "/dev/ttyUSB0");
     assert_eq!(
         r.line.driver.port_kind(),
         PortKind::Serial(PortSettings::n81(9600))
     );
-    assert_eq!(r.line.driver.tracker().num_sensors(), 3);
+    assert_eq!(r.line.driver.protocol().tracker().num_sensors(), 3);
 }
 
 #[test]
@@ -172,7 +177,7 @@ fn reset_sends_c_plus_plus_bytes_and_starts_in_a_tenth_of_a_second() {
         [STOP, &[STATUS_REQUEST], CONTINUOUS].concat()
     );
     assert!(r.line.driver.is_streaming());
-    assert_eq!(r.line.driver.resets(), 1);
+    assert_eq!(r.line.driver.stats().resets, 1);
     assert_eq!(r.texts_with("continuous output requested"), 1);
     assert_eq!(r.texts_with("kept sending"), 0);
 }
@@ -197,7 +202,7 @@ fn values_and_first_byte_times_arrive_exactly_in_order() {
             assert!(sent.iter().any(|s| s.sample.exponent == e));
         }
         assert!(sent.iter().any(|s| s.sample.status == 1));
-        assert_eq!(r.line.driver.skipped_bytes(), 0);
+        assert_eq!(r.line.driver.protocol().skipped_bytes(), 0);
     }
 }
 
@@ -222,7 +227,7 @@ fn garbage_between_records_loses_nothing() {
     }
     r.line.run_for(Duration::from_millis(500));
     r.assert_all_arrived();
-    assert!(r.line.driver.skipped_bytes() >= 10);
+    assert!(r.line.driver.protocol().skipped_bytes() >= 10);
     assert!(r.texts_with("skipped") >= 1);
 }
 
@@ -256,7 +261,7 @@ fn a_silent_dynasight_is_reset_and_resumes() {
     r.forget_after_first_pose();
     r.line.run_for(Duration::from_secs(1));
     r.assert_all_arrived();
-    assert_eq!(r.line.driver.resets(), 2);
+    assert_eq!(r.line.driver.stats().resets, 2);
 }
 
 impl Rig {
@@ -279,7 +284,7 @@ fn a_closed_port_is_reopened_and_reset() {
     r.assert_all_arrived();
     // No time-out texts: the port's failure is the serial layer's to report.
     assert_eq!(r.texts_with("Tracker failed"), 0);
-    assert_eq!(r.line.driver.resets(), 2);
+    assert_eq!(r.line.driver.stats().resets, 2);
 }
 
 #[test]
@@ -354,11 +359,14 @@ fn wrong_status_answers_are_reported_and_retried() {
             "{reply:?}: {texts:?}"
         );
         assert!(failures.iter().all(|(s, _)| *s == severity));
-        assert_eq!(r.line.driver.reset_attempts() as usize, stops.len());
+        assert_eq!(
+            r.line.driver.protocol().reset_attempts() as usize,
+            stops.len()
+        );
         // The device recovers: the next attempt succeeds.
         r.line.device.set_status_reply(StatusReply::Record);
         r.run_to_first_pose(Duration::from_secs(4));
-        assert_eq!(r.line.driver.reset_attempts(), 0);
+        assert_eq!(r.line.driver.protocol().reset_attempts(), 0);
     }
 }
 
@@ -371,7 +379,7 @@ fn every_config_variant_builds_and_bad_lines_are_named() {
     let entries = parse_str(text, "dyna.cfg").unwrap();
     let conn = Connection::new_loopback();
     let mut names = Vec::new();
-    let devices = build_devices(&entries, &conn, false, |n| {
+    let devices = build_devices(&entries, &conn, false, None, |n| {
         if let BuildNote::Opened { name, .. } = n {
             names.push(name.to_string());
         }

@@ -1,5 +1,5 @@
 //! Polhemus Fastrak, and InterSense IS-600 / IS-900 trackers in their Fastrak-compatible
-//! serial mode: a sans-IO [`SerialDriver`] and a device simulator ([`sim`]).
+//! serial mode: a sans-IO [`SerialDriver`] and a device simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration lines served
 //!
@@ -47,9 +47,11 @@
 //! failed attempts escalate as described in [`reset`]. Garbage is skipped byte by byte
 //! ([`framing`]) without losing the records after it.
 
+pub mod config;
 pub mod framing;
 pub mod record;
 pub mod reset;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 pub mod stations;
 
@@ -64,8 +66,28 @@ use self::record::{is900_offset, ButtonFormat, StationFormat, MAX_STATIONS};
 use self::reset::{Extra, Progress, ResetPlan, ResetSequence, Say};
 use self::stations::StationServers;
 use crate::devices::text::TextSeverity;
+use crate::driver::registry::{Driver, Hint};
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::server::config::{self, ResetStep, StationDevice};
+
+use self::config::{Fastrak, InterSense, ResetStep, StationDevice};
+
+/// The registry entry: `vrpn_Tracker_Fastrak`, and `vrpn_Tracker_InterSense` (refused with
+/// an explanation: C++ serves it through InterSense's own library).
+pub static DRIVER: Driver = Driver {
+    keywords: &["vrpn_Tracker_Fastrak", "vrpn_Tracker_InterSense"],
+    parse: |line| {
+        if line.keyword() == "vrpn_Tracker_InterSense" {
+            config::parse_intersense(line)
+        } else {
+            config::parse_fastrak(line)
+        }
+    },
+    hints: &[Hint {
+        keyword: "vrpn_Tracker_IS900",
+        text: "VRPN has no such keyword; run an IS-900 with vrpn_Tracker_Fastrak NAME PORT \
+               BAUD IS900time (or vrpn_Tracker_InterSense)",
+    }],
+};
 use crate::time::{Now, TimeVal};
 use crate::{Connection, Error, TrackerServer};
 
@@ -112,7 +134,7 @@ pub struct FastrakDriver {
 impl FastrakDriver {
     /// The driver for a `vrpn_Tracker_Fastrak` entry, with its tracker (four sensors) and
     /// station devices served on `conn`.
-    pub fn new(cfg: &config::Fastrak, conn: &Connection) -> Result<FastrakDriver, Error> {
+    pub fn new(cfg: &Fastrak, conn: &Connection) -> Result<FastrakDriver, Error> {
         FastrakDriver::build(
             Setup {
                 name: &cfg.name,
@@ -121,7 +143,7 @@ impl FastrakDriver {
                 is900_time: cfg.is900_timestamps,
                 reset_commands: &cfg.reset_commands,
                 devices: &cfg.stations,
-                stations: config::Fastrak::STATIONS as usize,
+                stations: Fastrak::STATIONS as usize,
             },
             conn,
         )
@@ -132,7 +154,7 @@ impl FastrakDriver {
     /// `COMn`/`AUTO` does not give. The tracker has eight sensors; `ResetAtStartup` changes
     /// nothing, because the port is always reset when it opens.
     pub fn from_intersense(
-        cfg: &config::InterSense,
+        cfg: &InterSense,
         port: &str,
         baud: u32,
         conn: &Connection,
@@ -145,7 +167,7 @@ impl FastrakDriver {
                 is900_time: cfg.is900_timestamps,
                 reset_commands: &cfg.reset_commands,
                 devices: &cfg.stations,
-                stations: config::InterSense::STATIONS as usize,
+                stations: InterSense::STATIONS as usize,
             },
             conn,
         )

@@ -23,7 +23,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::MAX_STATIONS;
-use crate::serial::testing::DeviceModel;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// Ctrl-Y: reinitialise.

@@ -2,8 +2,8 @@
 //! stylus (two buttons) or a genuine Fastrak stylus (one button). Each is served under its own
 //! device name, from the station's records.
 
+use super::config::{StationDevice, WandClip};
 use super::record::{joystick_raw, ButtonFormat, Record};
-use crate::server::config::{StationDevice, WandClip};
 use crate::{AnalogServer, ButtonServer, Connection, Error, TimeVal};
 
 /// Buttons of an IS-900 wand.

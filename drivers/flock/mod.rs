@@ -1,6 +1,6 @@
 //! Ascension Flock of Birds: every receiver on the master bird's serial line
 //! ([`FlockDriver`]), or one serial line per receiver ([`parallel`]); sans-IO drivers and a
-//! device simulator ([`sim`]).
+//! device simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration lines served
 //!
@@ -45,11 +45,13 @@
 //! * A group-mode record whose address is not one of the receivers is skipped (C++ would
 //!   report it under a sensor number it does not have).
 
+pub mod config;
 pub mod framer;
 mod notes;
 pub mod parallel;
 pub mod record;
 pub mod reset;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 
 #[cfg(test)]
@@ -64,10 +66,26 @@ use self::notes::{say, FailureText};
 use self::record::{invert_xyzw, sensor_for_address, PosQuat, Transmitter, GROUP_RECORD_LEN};
 use self::reset::{Outcome, Progress, ResetPlan, ResetSequence};
 use crate::devices::text::TextSeverity;
+use crate::driver::registry::Driver;
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::server::config;
 use crate::time::Now;
 use crate::{Connection, Error, TrackerServer};
+
+pub use self::config::{Flock, FlockParallel};
+
+/// The registry entry: `vrpn_Tracker_Flock` (every receiver on the master's line) and
+/// `vrpn_Tracker_Flock_Parallel` (one line per receiver).
+pub static DRIVER: Driver = Driver {
+    keywords: &["vrpn_Tracker_Flock", "vrpn_Tracker_Flock_Parallel"],
+    parse: |line| {
+        if line.keyword() == "vrpn_Tracker_Flock_Parallel" {
+            config::parse_parallel(line)
+        } else {
+            config::parse_flock(line)
+        }
+    },
+    hints: &[],
+};
 
 pub use self::parallel::FlockParallelPort;
 
@@ -157,7 +175,7 @@ pub struct FlockDriver {
 impl FlockDriver {
     /// The driver for a `vrpn_Tracker_Flock` entry, with its tracker (one sensor per
     /// receiver) served on `conn`.
-    pub fn new(cfg: &config::Flock, conn: &Connection) -> Result<FlockDriver, Error> {
+    pub fn new(cfg: &Flock, conn: &Connection) -> Result<FlockDriver, Error> {
         let receivers = u8::try_from(cfg.sensors)
             .ok()
             .filter(|n| (1..=config::MAX_FLOCK_SENSORS as u8).contains(n))

@@ -3,7 +3,7 @@
 use std::fmt;
 
 use crate::devices::text::TextSeverity;
-use crate::drivers::stack_text::with_text;
+use crate::driver::text::with_text;
 use crate::TrackerServer;
 
 /// Formats `args` into a fixed buffer and sends it as a text message from `tracker`.

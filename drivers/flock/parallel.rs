@@ -30,6 +30,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config::{self, Hemisphere};
 use super::framer::Framer;
 use super::notes::{say, FailureText};
 use super::record::{PosQuat, Transmitter, RECORD_LEN};
@@ -39,7 +40,6 @@ use super::reset::{
 use super::{SkipNotes, ADVICE, FAILURES_BEFORE_PAUSE, RETRY_PAUSE, TRYING_TO_RESET, WATCHDOG};
 use crate::devices::text::TextSeverity;
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::server::config::{self, Hemisphere};
 use crate::time::Now;
 use crate::{Connection, Error, TrackerServer};
 

@@ -4,16 +4,17 @@
 
 use std::time::Duration;
 
+use super::config;
 use super::parallel::{FlockParallelPort, Role};
 use super::record::Transmitter;
 use super::sim::{FlockSim, SentRecord, SimConfig};
-use super::tests::{collect_texts, entry, start_now};
+use super::tests::{collect_texts, start_now};
 use super::{RETRY_PAUSE, WATCHDOG};
 use crate::devices::base::set_print_threshold;
 use crate::devices::text::TextSeverity;
-use crate::serial::testing::VirtualLines;
 use crate::serial::{PortKind, PortSettings, SerialDriver};
-use crate::server::config::{self, DeviceConfig};
+use crate::server::config::parse_one;
+use crate::sim::VirtualLines;
 use crate::{Connection, Now, SenderId, TimeVal, TrackerPose, TrackerRemote};
 
 type Lines = VirtualLines<FlockParallelPort, FlockSim>;
@@ -30,10 +31,7 @@ struct Rig {
 }
 
 fn parallel_cfg(text: &str) -> config::FlockParallel {
-    match entry(text) {
-        DeviceConfig::FlockParallel(f) => f,
-        other => panic!("not a Flock_Parallel entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 fn rig(cfg_text: &str, tweak: impl FnOnce(&mut SimConfig), seed: u64) -> Rig {

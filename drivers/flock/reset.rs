@@ -47,9 +47,9 @@
 
 use std::time::{Duration, Instant};
 
+use super::config::Hemisphere;
 use super::record::Transmitter;
 use crate::serial::PortOps;
-use crate::server::config::Hemisphere;
 use crate::time::Now;
 
 /// How long RTS is held up (C++: 1 s).

@@ -34,13 +34,13 @@ use std::collections::VecDeque;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config;
 use super::record::{Transmitter, METRES_PER_INCH, PHASING_BIT};
 use super::reset::{
     self, AUTOCONFIG, BIRD_STATUS, CRYSTAL_SPEED, EXPANDED_ERROR, GROUP_MODE, RATE_COUNT,
     STATUS_LEN, SYSTEM_STATUS, UNIT_ACCESSIBLE, UNIT_RECEIVER, UNIT_RUNNING,
 };
-use crate::serial::testing::DeviceModel;
-use crate::server::config;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// Highest bus address.

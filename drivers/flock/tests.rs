@@ -7,15 +7,16 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config;
 use super::record::Transmitter;
 use super::reset::{self, AUTOCONFIG_LIMIT, BOOT_LIMIT};
 use super::sim::{pose, FlockSim, SentRecord, SimConfig};
 use super::{FlockDriver, RETRY_PAUSE, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
 use crate::serial::{PortKind, PortSettings, SerialDriver};
-use crate::server::config::{self, parse_str, DeviceConfig};
+use crate::server::config::parse_one;
+use crate::sim::VirtualLine;
 use crate::{Connection, Now, SenderFilter, TimeVal, TrackerPose, TrackerRemote};
 
 type Line = VirtualLine<FlockDriver, FlockSim>;
@@ -33,15 +34,8 @@ pub(super) fn start_now() -> Now {
     }
 }
 
-pub(super) fn entry(text: &str) -> DeviceConfig {
-    parse_str(text, "test.cfg").unwrap().remove(0).config
-}
-
 fn flock_cfg(text: &str) -> config::Flock {
-    match entry(text) {
-        DeviceConfig::Flock(f) => f,
-        other => panic!("not a Flock entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 /// Collects the text messages `name` sends on `conn`.

@@ -1,5 +1,5 @@
 //! The Linux joystick interface (`/dev/input/jsN`, C++ `vrpn_Joylin`): a sans-IO
-//! [`SerialDriver`] that reads `js_event` records, and a joystick simulator ([`sim`]).
+//! [`SerialDriver`] that reads `js_event` records, and a joystick simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration line served
 //!
@@ -41,7 +41,9 @@
 //!   blocks the whole server for 5 s, tries once, and gives up for good if that fails.
 //! * There is no watchdog: an untouched joystick is silent, and that is not a fault.
 
+pub mod config;
 pub mod event;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 
 #[cfg(test)]
@@ -50,12 +52,21 @@ mod tests;
 use std::time::Instant;
 
 use self::event::{Framer, JsEvent, Kind};
-use super::stack_text::with_text;
 use crate::devices::text::TextSeverity;
+use crate::driver::registry::Driver;
+use crate::driver::text::with_text;
 use crate::serial::{PortKind, PortOps, SerialDriver};
-use crate::server::config;
 use crate::time::Now;
 use crate::{AnalogServer, ButtonServer, Connection, Error};
+
+pub use self::config::Joylin;
+
+/// The registry entry: `vrpn_Joylin`.
+pub static DRIVER: Driver = Driver {
+    keywords: &["vrpn_Joylin"],
+    parse: config::parse,
+    hints: &[],
+};
 
 /// Axes assumed before the device says otherwise (C++'s default).
 pub const DEFAULT_AXES: usize = 2;
@@ -86,7 +97,7 @@ pub struct JoylinDriver {
 
 impl JoylinDriver {
     /// The driver for a `vrpn_Joylin` entry, with its Analog and Button served on `conn`.
-    pub fn new(cfg: &config::Joylin, conn: &Connection) -> Result<JoylinDriver, Error> {
+    pub fn new(cfg: &Joylin, conn: &Connection) -> Result<JoylinDriver, Error> {
         Ok(JoylinDriver {
             name: cfg.name.clone(),
             device: cfg.device.clone(),

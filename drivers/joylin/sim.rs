@@ -17,7 +17,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::event::{JsEvent, Kind};
-use crate::serial::testing::DeviceModel;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// How the simulated joystick is built and behaves.

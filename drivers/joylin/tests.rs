@@ -6,15 +6,16 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config;
 use super::event::{JsEvent, Kind};
 use super::sim::{JoystickSim, SimConfig};
 use super::{JoylinDriver, DEFAULT_AXES, DEFAULT_BUTTONS, READ_ERROR};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
 use crate::serial::{PortKind, SerialDriver};
-use crate::server::config::{self, parse_str, DeviceConfig};
+use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
+use crate::sim::VirtualLine;
 use crate::{AnalogRemote, ButtonRemote, Connection, Now, SenderFilter, TimeVal};
 
 type Shared<T> = Rc<RefCell<Vec<T>>>;
@@ -35,10 +36,7 @@ struct Rig {
 }
 
 fn joylin_cfg(text: &str) -> config::Joylin {
-    match parse_str(text, "test.cfg").unwrap().remove(0).config {
-        DeviceConfig::Joylin(j) => j,
-        other => panic!("not a Joylin entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 fn rig(sim: SimConfig, tweak: impl FnOnce(&mut JoystickSim), seed: u64) -> Rig {
@@ -326,7 +324,7 @@ fn every_config_variant_builds_and_bad_lines_are_named() {
     let entries = parse_str(text, "joy.cfg").unwrap();
     let conn = Connection::new_loopback();
     let mut names = Vec::new();
-    let devices = build_devices(&entries, &conn, false, |n| {
+    let devices = build_devices(&entries, &conn, false, None, |n| {
         if let BuildNote::Opened { name, .. } = n {
             names.push(name.to_string());
         }

@@ -1,5 +1,5 @@
 //! Logitech / 3Dconnexion Magellan (SpaceMouse) on a serial line: a sans-IO [`SerialDriver`]
-//! and a device simulator ([`sim`]).
+//! and a device simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration line served
 //!
@@ -51,9 +51,11 @@
 //!   client keeps the old values).
 //! * Resets are announced by warning texts instead of lines on the server's standard error.
 
+pub mod config;
 pub mod framer;
 pub mod record;
 pub mod reset;
+#[cfg(any(test, feature = "sim"))]
 pub mod sim;
 
 #[cfg(test)]
@@ -64,12 +66,21 @@ use std::time::{Duration, Instant};
 use self::framer::{Framed, Framer, Problem, Skipped};
 use self::record::{axis_raw, axis_value, keys, nibble, AXES, BUTTONS, MOUSE_MODE};
 use self::reset::{Failure, Progress, ResetSequence};
-use super::stack_text::{with_text, Shown, ShownBytes};
 use crate::devices::text::TextSeverity;
+use crate::driver::registry::Driver;
+use crate::driver::text::{with_text, Shown, ShownBytes};
 use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::server::config;
 use crate::time::{Now, TimeVal};
 use crate::{AnalogServer, ButtonServer, Connection, Error};
+
+pub use self::config::Magellan;
+
+/// The registry entry: `vrpn_Magellan`.
+pub static DRIVER: Driver = Driver {
+    keywords: &["vrpn_Magellan"],
+    parse: config::parse,
+    hints: &[],
+};
 
 /// Silence after which the device is asked for its mode, to prove it is still there.
 pub const IDLE_PROBE: Duration = Duration::from_secs(2);
@@ -111,7 +122,7 @@ pub struct MagellanDriver {
 
 impl MagellanDriver {
     /// The driver for a `vrpn_Magellan` entry, with its Analog and Button served on `conn`.
-    pub fn new(cfg: &config::Magellan, conn: &Connection) -> Result<MagellanDriver, Error> {
+    pub fn new(cfg: &Magellan, conn: &Connection) -> Result<MagellanDriver, Error> {
         let plan = if cfg.alt_reset {
             reset::ALTERNATIVE
         } else {

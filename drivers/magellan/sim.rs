@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 use super::record::{
     encode_axes, encode_keys, nibble, nibble_char, AXES, CR, MAX_RECORD, MOUSE_MODE,
 };
-use crate::serial::testing::DeviceModel;
+use crate::sim::DeviceModel;
 use crate::time::Now;
 
 /// Records kept in [`MagellanSim::log`].

@@ -7,16 +7,17 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config;
 use super::record::{axis_value, AXES, BUTTONS, RESET_NULL_RADIUS};
 use super::reset::{BYTE_GAP, RETRY_PAUSE};
 use super::sim::{MagellanSim, Sent, SentRecord, SimConfig};
 use super::{MagellanDriver, IDLE_PROBE, PROBE, PROBE_TIMEOUT};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
 use crate::serial::SerialDriver;
-use crate::server::config::{self, parse_str, DeviceConfig};
+use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
+use crate::sim::VirtualLine;
 use crate::{AnalogRemote, ButtonRemote, Connection, Now, SenderFilter, TimeVal};
 
 type Line = VirtualLine<MagellanDriver, MagellanSim>;
@@ -43,10 +44,7 @@ impl Event {
 }
 
 fn magellan_cfg(text: &str) -> config::Magellan {
-    match parse_str(text, "test.cfg").unwrap().remove(0).config {
-        DeviceConfig::Magellan(m) => m,
-        other => panic!("not a Magellan entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 struct Rig {
@@ -421,7 +419,7 @@ fn every_variant_parses_and_builds() {
         assert_eq!(d.port(), cfg.port);
         let entries = parse_str(text, "test.cfg").unwrap();
         let mut opened = Vec::new();
-        let devices = build_devices(&entries, &Connection::new_loopback(), false, |n| {
+        let devices = build_devices(&entries, &Connection::new_loopback(), false, None, |n| {
             if let BuildNote::Opened { name, .. } = n {
                 opened.push(name.to_owned());
             }

@@ -227,6 +227,18 @@ impl RemoteCore {
         &self.conn
     }
 
+    /// Blocks until data arrives, the connection has timed work due, or `timeout` passes,
+    /// without spinning ([`Connection::wait`]); returns whether data arrived. Call
+    /// [`mainloop`](Self::mainloop) next.
+    pub fn wait(&self, timeout: std::time::Duration) -> Result<bool, Error> {
+        self.conn.wait(timeout)
+    }
+
+    /// The descriptor to wait on in another event loop ([`Connection::fd`]).
+    pub fn fd(&self) -> Option<std::os::fd::RawFd> {
+        self.conn.fd()
+    }
+
     /// The device (sender) name.
     pub fn device(&self) -> &str {
         &self.device

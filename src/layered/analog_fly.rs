@@ -6,6 +6,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Instant;
 
+use super::config::{AnalogFly, FlyMode};
 use super::{
     col_matrix_from_quat, euler_col_matrix, interval, mat_mult, quat_from_euler,
     quat_from_row_matrix, update_interval, xyz_quat_invert, AnalogSource, ButtonSource, Mat4,
@@ -16,7 +17,6 @@ use crate::devices::tracker::TrackerServer;
 use crate::devices::ServerDevice;
 use crate::dispatch::HandlerId;
 use crate::error::Error;
-use crate::server::config::{AnalogFly, FlyMode};
 use crate::time::{checked_duration, Now, TimeVal};
 
 /// Everything the callbacks and the mainloop share.

@@ -5,6 +5,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Instant;
 
+use super::config::{ButtonFly, FlyMode, ScaleAnalog};
 use super::{
     euler_col_matrix, interval, mat_mult, quat_from_row_matrix, update_interval, AnalogSource,
     ButtonSource, Mat4, IDENTITY, TWO_PI,
@@ -14,7 +15,6 @@ use crate::devices::tracker::TrackerServer;
 use crate::devices::ServerDevice;
 use crate::dispatch::HandlerId;
 use crate::error::Error;
-use crate::server::config::{ButtonFly, FlyMode, ScaleAnalog};
 use crate::time::{checked_duration, Now, TimeVal};
 
 struct AxisState {

@@ -10,16 +10,17 @@
 //! The pose arithmetic reproduces C++ VRPN's quaternion library (quatlib) operation for operation
 //! so that reported poses agree with C++ bit for bit.
 
+use crate::config::DeviceRef;
 use crate::connection::Connection;
 use crate::devices::analog::AnalogRemote;
 use crate::devices::base::RemoteCore;
 use crate::devices::button::ButtonRemote;
 use crate::error::Error;
-use crate::server::config::DeviceRef;
 use crate::time::TimeVal;
 
 pub mod analog_fly;
 pub mod button_fly;
+pub mod config;
 
 pub use analog_fly::TrackerAnalogFly;
 pub use button_fly::TrackerButtonFly;

@@ -2,16 +2,25 @@
 //! poll, bytes are handed to the driver with the time the poll woke for them, the driver's
 //! requests are carried out, and a port that fails or vanishes is reported and reopened —
 //! for every driver alike.
+//!
+//! A port problem (it cannot be opened, it failed) is reported once per change, never at
+//! every retry: as a text message to the clients connected then, to the program through a
+//! [`StatusSink`] if one was given, and again to every client that connects while the
+//! problem lasts, so that a client started later learns why nothing arrives.
 
+use std::cell::Cell;
 use std::io;
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use super::driver::{PortOp, PortOps, SerialDriver};
 use super::port::Port;
 use crate::connection::Connection;
+use crate::connection::ConnectionEvent;
 use crate::devices::text::TextSeverity;
 use crate::devices::ServerDevice;
 use crate::dispatch::SenderId;
+use crate::driver::status::{DeviceStatus, OpenFailure, StatusSink};
 use crate::net::Reactor;
 use crate::time::Now;
 
@@ -22,6 +31,21 @@ const READ_CHUNK: usize = 512;
 /// Output the port did not take at once, kept for the next pass (commands are small; a driver
 /// that writes more than this to a line that does not drain loses the excess).
 const MAX_PENDING_WRITE: usize = 16 * 1024;
+
+/// A port problem, with the text clients were sent about it.
+#[derive(Clone, Debug)]
+enum Problem {
+    CannotOpen(OpenFailure, String),
+    Lost(String),
+}
+
+impl Problem {
+    fn text(&self) -> &str {
+        match self {
+            Problem::CannotOpen(_, text) | Problem::Lost(text) => text,
+        }
+    }
+}
 
 /// A driver and the port it reads. See the module documentation.
 pub struct SerialDevice<D: SerialDriver> {
@@ -37,8 +61,12 @@ pub struct SerialDevice<D: SerialDriver> {
     pending: Vec<u8>,
     buf: Box<[u8; READ_CHUNK]>,
     reopen_at: Option<Instant>,
-    /// The last open failure reported (not repeated while it stays the same).
-    reported: Option<String>,
+    /// The port's problem while it lasts, as last reported (not repeated while it stays the
+    /// same; sent again to clients that connect meanwhile).
+    problem: Option<Problem>,
+    /// Set when a client connects: a problem is told to it at the next pass.
+    announce: Rc<Cell<bool>>,
+    status: Option<StatusSink>,
     /// Times the port was opened.
     opens: u64,
     /// The time of the last pass (to retry output the port did not take).
@@ -65,10 +93,22 @@ impl<D: SerialDriver> SerialDevice<D> {
             pending: Vec::with_capacity(256),
             buf: Box::new([0; READ_CHUNK]),
             reopen_at: None,
-            reported: None,
+            problem: None,
+            announce: {
+                let flag = Rc::new(Cell::new(false));
+                let f = flag.clone();
+                conn.on_event(ConnectionEvent::GotConnection, move || f.set(true));
+                flag
+            },
+            status: None,
             opens: 0,
             last_pass: None,
         }
+    }
+
+    /// Also tells `sink` about the port's state changes (for the program to show them).
+    pub fn report_status_to(&mut self, sink: StatusSink) {
+        self.status = Some(sink);
     }
 
     /// The driver.
@@ -114,9 +154,12 @@ impl<D: SerialDriver> SerialDevice<D> {
                         }
                     }
                 }
-                if self.reported.take().is_some() || self.opens > 0 {
+                if self.problem.take().is_some() || self.opens > 0 {
                     let text = format!("serial port {} is open again", self.path);
                     self.text(TextSeverity::Normal, &text);
+                    self.tell(DeviceStatus::Opened {
+                        port: self.path.clone(),
+                    });
                 }
                 self.port = Some(port);
                 self.opens += 1;
@@ -129,17 +172,28 @@ impl<D: SerialDriver> SerialDevice<D> {
         }
     }
 
+    fn tell(&self, status: DeviceStatus) {
+        if let Some(sink) = &self.status {
+            sink(&self.name, &status);
+        }
+    }
+
     fn failed_to_open(&mut self, now: Now, e: io::Error) {
         self.reopen_at = Some(now.mono + REOPEN_INTERVAL);
-        let what = e.to_string();
-        if self.reported.as_deref() != Some(what.as_str()) {
-            let text = format!(
-                "cannot open serial port {} for {}: {what}; trying again every {:?}",
-                self.path, self.name, REOPEN_INTERVAL
-            );
-            self.text(TextSeverity::Error, &text);
-            self.reported = Some(what);
+        let reason = OpenFailure::from_io(&e);
+        if matches!(&self.problem, Some(Problem::CannotOpen(r, _)) if *r == reason) {
+            return;
         }
+        let text = format!(
+            "cannot open serial port {} for {}: {reason}; trying again every {:?}",
+            self.path, self.name, REOPEN_INTERVAL
+        );
+        self.text(TextSeverity::Error, &text);
+        self.tell(DeviceStatus::CannotOpen {
+            port: self.path.clone(),
+            reason: reason.clone(),
+        });
+        self.problem = Some(Problem::CannotOpen(reason, text));
     }
 
     fn close(&mut self) {
@@ -160,7 +214,11 @@ impl<D: SerialDriver> SerialDevice<D> {
             self.path, self.name
         );
         self.text(TextSeverity::Error, &text);
-        self.reported = Some(why.to_string());
+        self.tell(DeviceStatus::Lost {
+            port: self.path.clone(),
+            reason: why.to_string(),
+        });
+        self.problem = Some(Problem::Lost(text));
         self.reopen_at = Some(now.mono + REOPEN_INTERVAL);
     }
 
@@ -274,6 +332,11 @@ impl<D: SerialDriver> ServerDevice for SerialDevice<D> {
 
     fn mainloop(&mut self, now: Now) {
         self.last_pass = Some(now.mono);
+        if self.announce.replace(false) && self.port.is_none() {
+            if let Some(p) = &self.problem {
+                self.text(TextSeverity::Error, p.text());
+            }
+        }
         if self.port.is_none() && self.reopen_at.map_or(true, |t| now.mono >= t) {
             self.open(now);
         }

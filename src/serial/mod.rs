@@ -1,6 +1,6 @@
-//! Serial devices: the sans-IO driver interface ([`driver`]) and, for tests and simulators, a
-//! virtual serial line that runs a driver against a device model on a virtual clock
-//! ([`testing`]).
+//! Serial devices: the sans-IO driver interface ([`driver`]), the port ([`port`]) and a driver
+//! on a port in the server's reactor ([`device`]). (The simulated line and pseudo-terminal
+//! devices the tests use are in `crate::sim`, with the `sim` feature.)
 //!
 //! A driver never touches a file descriptor or a clock. It is handed the bytes the port read
 //! (with the time the poll woke for the first of them), the current time on each deadline, and
@@ -11,8 +11,6 @@
 pub mod device;
 pub mod driver;
 pub mod port;
-pub mod pty;
-pub mod testing;
 
 pub use device::SerialDevice;
 pub use driver::{Parity, PortKind, PortOp, PortOps, PortSettings, SerialDriver};

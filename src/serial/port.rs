@@ -53,6 +53,19 @@ fn baud_rate(baud: u32) -> io::Result<BaudRate> {
     })
 }
 
+/// A `serialport` error as the `io::Error` it stands for (its kind kept: a missing file is
+/// `NotFound`, a refused open `PermissionDenied`).
+fn from_serialport(e: serialport::Error) -> io::Error {
+    match e.kind() {
+        serialport::ErrorKind::Io(kind) => io::Error::new(kind, e.description),
+        serialport::ErrorKind::NoDevice => io::Error::other(format!(
+            "{} (is another program using the port?)",
+            e.description
+        )),
+        _ => io::Error::other(e.description),
+    }
+}
+
 fn errno(e: nix::errno::Errno) -> io::Error {
     io::Error::from_raw_os_error(e as i32)
 }
@@ -126,7 +139,7 @@ impl Port {
             PortKind::Serial(settings) => {
                 let tty = serialport::new(path, settings.baud)
                     .open_native()
-                    .map_err(|e| io::Error::other(e.description))?;
+                    .map_err(from_serialport)?;
                 let fd = tty.as_raw_fd();
                 configure(fd, &settings)?;
                 set_nonblocking(fd)?;
@@ -172,9 +185,7 @@ impl Port {
     /// Discards received, unread input.
     pub fn flush_input(&self) -> io::Result<()> {
         match self {
-            Port::Serial(t) => t
-                .clear(ClearBuffer::Input)
-                .map_err(|e| io::Error::other(e.description)),
+            Port::Serial(t) => t.clear(ClearBuffer::Input).map_err(from_serialport),
             Port::Input(_) => Ok(()),
         }
     }
@@ -182,9 +193,7 @@ impl Port {
     /// Discards written, unsent output.
     pub fn flush_output(&self) -> io::Result<()> {
         match self {
-            Port::Serial(t) => t
-                .clear(ClearBuffer::Output)
-                .map_err(|e| io::Error::other(e.description)),
+            Port::Serial(t) => t.clear(ClearBuffer::Output).map_err(from_serialport),
             Port::Input(_) => Ok(()),
         }
     }

@@ -3,9 +3,10 @@
 
 pub mod config;
 pub mod factory;
+pub mod limits;
 pub mod options;
 pub mod run;
 
-pub use factory::{build_devices, BuildNote};
+pub use factory::{build_devices, BuildError, BuildNote};
 pub use options::{parse_args, ServerCommand, ServerOptions, SleepPolicy};
 pub use run::ServerLoop;

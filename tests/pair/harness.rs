@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use vrpn::proto::ping::{PingAction, PingCycle};
 use vrpn::proto::{ConnectionEvent, Delivery, IoRequest, Limits, Notice, PeerId, Session};
-use vrpn::serial::testing::Rng;
+use vrpn::sim::Rng;
 use vrpn::time::{Now, TimeVal};
 use vrpn::wire::{self, class};
 

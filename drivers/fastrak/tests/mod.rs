@@ -6,6 +6,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use super::config::{self, WandClip};
 use super::record::{is900_offset, joystick_raw, METRES_PER_INCH};
 use super::reset::{BREAK_GAP, QUIET};
 use super::sim::{self, FastrakSim, SentRecord, SimConfig};
@@ -13,9 +14,9 @@ use super::stations::clip;
 use super::{FastrakDriver, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
-use crate::serial::testing::VirtualLine;
 use crate::serial::{PortKind, PortSettings, SerialDriver};
-use crate::server::config::{self, parse_str, DeviceConfig, WandClip};
+use crate::server::config::parse_one;
+use crate::sim::VirtualLine;
 use crate::{
     AnalogRemote, ButtonRemote, Connection, Now, SenderFilter, TimeVal, TrackerPose, TrackerRemote,
 };
@@ -40,15 +41,8 @@ struct Rig {
     _remotes: (TrackerRemote, Vec<ButtonRemote>, Vec<AnalogRemote>),
 }
 
-fn entry(text: &str) -> DeviceConfig {
-    parse_str(text, "test.cfg").unwrap().remove(0).config
-}
-
 fn fastrak_cfg(text: &str) -> config::Fastrak {
-    match entry(text) {
-        DeviceConfig::Fastrak(f) => f,
-        other => panic!("not a Fastrak entry: {other:?}"),
-    }
+    parse_one(text)
 }
 
 const START_WALL: TimeVal = TimeVal {
@@ -413,7 +407,7 @@ fn garbage_inside_records_costs_at_most_the_record_it_hits() {
     let mut rig = rig("vrpn_Tracker_Fastrak F /dev/ttyS0 38400\n", &[], sim, 7);
     rig.line.split_reads = true;
     rig.start_up();
-    let mut rng = crate::serial::testing::Rng::new(99);
+    let mut rng = crate::sim::Rng::new(99);
     let injections = 40;
     for _ in 0..injections {
         rig.line

@@ -178,9 +178,7 @@ fn status_letters_and_a_54_byte_status_are_accepted() {
 fn intersense_entry_runs_eight_stations_over_the_fastrak_protocol() {
     let text = "vrpn_Tracker_InterSense IS0 COM1 IS900time ResetAtStartup /\n\
                 Wand Wand6 6 -1.0 -0.1 0.1 1.0 -0.5 0.0 0.0 0.5\n";
-    let DeviceConfig::InterSense(cfg) = entry(text) else {
-        panic!("not an InterSense entry");
-    };
+    let cfg: config::InterSense = parse_one(text);
     let mut sim = SimConfig::new(115_200);
     sim.stations = 8;
     sim.cycle = Duration::from_millis(30);

@@ -231,6 +231,13 @@ impl Session {
         }
     }
 
+    /// Whether a peer used up its message budget in the last pass, so input may be waiting in
+    /// its buffers or sockets that no poll will announce again: a wait must not block.
+    pub fn input_buffered(&self) -> bool {
+        let budget = self.limits.max_messages_per_peer_per_loop;
+        self.peers.iter().flatten().any(|p| p.budget >= budget)
+    }
+
     /// Starts a new loop pass at `now`: every peer gets its full message budget again, and a
     /// replay's clock advances (C++ model: each pass plays what became due since the last).
     pub fn begin_pass(&mut self, now: &dyn crate::time::TimeSource) {

@@ -1,218 +1,41 @@
-//! One parsed `vrpn.cfg` entry: the device configuration by type, where it came from, and the
-//! names and interfaces it serves.
+//! One parsed `vrpn.cfg` entry: the device's configuration (from its driver), where it came
+//! from, and the names and interfaces it serves; entries whose keyword no driver serves.
 
 use std::collections::HashMap;
 use std::fmt;
 
-use super::devices::{
-    AnalogExample, ButtonExample, CerealBox, DialExample, Dyna, Flock, FlockParallel, Joylin,
-    Magellan, TextExample, TrackerNull, TrackerSpin,
-};
-use super::error::{ConfigError, ConfigErrorKind, SourceLocation};
-use super::fastrak::{Fastrak, InterSense, StationDevice};
-use super::fly::{AnalogFly, ButtonFly};
-use super::{kw, KNOWN_KEYWORDS};
+use crate::config::{ConfigError, ConfigErrorKind, SourceLocation};
+use crate::devices::ServerDevice;
+use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
+use crate::drivers::REGISTRY;
+use crate::error::Error;
 
-/// One configured device, by type.
-#[derive(Clone, Debug, PartialEq)]
-pub enum DeviceConfig {
-    /// `vrpn_Tracker_NULL`.
-    TrackerNull(TrackerNull),
-    /// `vrpn_Tracker_Spin`.
-    TrackerSpin(TrackerSpin),
-    /// `vrpn_Button_Example`.
-    ButtonExample(ButtonExample),
-    /// `vrpn_Dial_Example`.
-    DialExample(DialExample),
-    /// `vrpn_Analog_Example` (our extension).
-    AnalogExample(AnalogExample),
-    /// `vrpn_Text_Example` (our extension).
-    TextExample(TextExample),
-    /// `vrpn_Tracker_AnalogFly` (boxed: it is much larger than the others).
-    AnalogFly(Box<AnalogFly>),
-    /// `vrpn_Tracker_ButtonFly`.
-    ButtonFly(ButtonFly),
-    /// `vrpn_Joylin`.
-    Joylin(Joylin),
-    /// `vrpn_Tracker_Fastrak`.
-    Fastrak(Fastrak),
-    /// `vrpn_Tracker_InterSense`.
-    InterSense(InterSense),
-    /// `vrpn_Tracker_Flock`.
-    Flock(Flock),
-    /// `vrpn_Tracker_Flock_Parallel`.
-    FlockParallel(FlockParallel),
-    /// `vrpn_Magellan`.
-    Magellan(Magellan),
-    /// `vrpn_CerealBox`.
-    CerealBox(CerealBox),
-    /// `vrpn_Tracker_Dyna`.
-    Dyna(Dyna),
-    /// A keyword we do not know. C++ `vrpn_server` stops on it by default and skips it with
-    /// `-warn`; see [`DeviceEntry::unknown_error`].
-    Unknown {
-        /// The first token of the line (empty for a line of only blanks).
-        keyword: String,
-        /// The remaining tokens.
-        args: Vec<String>,
-    },
+/// The entry of a keyword no driver serves. C++ `vrpn_server` stops on it by default and skips
+/// it with `-warn`; see [`DeviceEntry::unknown_error`]. Serves nothing; building it fails.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownDevice {
+    /// The first token of the line (empty for a line of only blanks).
+    pub keyword: String,
+    /// The remaining tokens.
+    pub args: Vec<String>,
 }
 
-impl DeviceConfig {
-    /// The `vrpn.cfg` keyword of this entry.
-    pub fn keyword(&self) -> &str {
-        match self {
-            DeviceConfig::TrackerNull(_) => kw::TRACKER_NULL,
-            DeviceConfig::TrackerSpin(_) => kw::TRACKER_SPIN,
-            DeviceConfig::ButtonExample(_) => kw::BUTTON_EXAMPLE,
-            DeviceConfig::DialExample(_) => kw::DIAL_EXAMPLE,
-            DeviceConfig::AnalogExample(_) => kw::ANALOG_EXAMPLE,
-            DeviceConfig::TextExample(_) => kw::TEXT_EXAMPLE,
-            DeviceConfig::AnalogFly(_) => kw::ANALOG_FLY,
-            DeviceConfig::ButtonFly(_) => kw::BUTTON_FLY,
-            DeviceConfig::Joylin(_) => kw::JOYLIN,
-            DeviceConfig::Fastrak(_) => kw::FASTRAK,
-            DeviceConfig::InterSense(_) => kw::INTERSENSE,
-            DeviceConfig::Flock(_) => kw::FLOCK,
-            DeviceConfig::FlockParallel(_) => kw::FLOCK_PARALLEL,
-            DeviceConfig::Magellan(_) => kw::MAGELLAN,
-            DeviceConfig::CerealBox(_) => kw::CEREALBOX,
-            DeviceConfig::Dyna(_) => kw::DYNA,
-            DeviceConfig::Unknown { keyword, .. } => keyword,
-        }
+impl DeviceSpec for UnknownDevice {
+    fn name(&self) -> &str {
+        ""
     }
 
-    /// The device's name (`None` for [`DeviceConfig::Unknown`]).
-    pub fn name(&self) -> Option<&str> {
-        Some(match self {
-            DeviceConfig::TrackerNull(d) => &d.name,
-            DeviceConfig::TrackerSpin(d) => &d.name,
-            DeviceConfig::ButtonExample(d) => &d.name,
-            DeviceConfig::DialExample(d) => &d.name,
-            DeviceConfig::AnalogExample(d) => &d.name,
-            DeviceConfig::TextExample(d) => &d.name,
-            DeviceConfig::AnalogFly(d) => &d.name,
-            DeviceConfig::ButtonFly(d) => &d.name,
-            DeviceConfig::Joylin(d) => &d.name,
-            DeviceConfig::Fastrak(d) => &d.name,
-            DeviceConfig::InterSense(d) => &d.name,
-            DeviceConfig::Flock(d) => &d.name,
-            DeviceConfig::FlockParallel(d) => &d.name,
-            DeviceConfig::Magellan(d) => &d.name,
-            DeviceConfig::CerealBox(d) => &d.name,
-            DeviceConfig::Dyna(d) => &d.name,
-            DeviceConfig::Unknown { .. } => return None,
-        })
+    fn served(&self) -> Vec<Served<'_>> {
+        Vec::new()
     }
 
-    /// Every name this entry publishes under: its own and those of its station devices.
-    pub fn device_names(&self) -> Vec<&str> {
-        let mut names: Vec<&str> = self.name().into_iter().collect();
-        let stations = match self {
-            DeviceConfig::Fastrak(d) => &d.stations[..],
-            DeviceConfig::InterSense(d) => &d.stations[..],
-            _ => &[],
-        };
-        names.extend(stations.iter().map(StationDevice::name));
-        names
+    fn device_names(&self) -> Vec<&str> {
+        Vec::new()
     }
 
-    /// Every (name, interface) pair this entry serves, in the order the server creates them:
-    /// the device's own interfaces under its name, then each station device's under the
-    /// station's name (a Wand is a Button and an Analog, a Stylus or FTStylus a Button).
-    /// Empty for [`DeviceConfig::Unknown`].
-    ///
-    /// Every device can also send text messages (warnings, errors) under its name; only
-    /// `vrpn_Text_Example`, which exists to send them, counts as serving [`Interface::Text`].
-    pub fn served(&self) -> Vec<Served<'_>> {
-        use Interface::*;
-        let own: &[Interface] = match self {
-            DeviceConfig::TrackerNull(_)
-            | DeviceConfig::TrackerSpin(_)
-            | DeviceConfig::AnalogFly(_)
-            | DeviceConfig::ButtonFly(_)
-            | DeviceConfig::Fastrak(_)
-            | DeviceConfig::InterSense(_)
-            | DeviceConfig::Flock(_)
-            | DeviceConfig::FlockParallel(_)
-            | DeviceConfig::Dyna(_) => &[Tracker],
-            DeviceConfig::ButtonExample(_) => &[Button],
-            DeviceConfig::DialExample(_) => &[Dial],
-            DeviceConfig::AnalogExample(_) => &[Analog],
-            DeviceConfig::TextExample(_) => &[Text],
-            DeviceConfig::Joylin(_) | DeviceConfig::Magellan(_) => &[Analog, Button],
-            DeviceConfig::CerealBox(_) => &[Button, Analog, Dial],
-            DeviceConfig::Unknown { .. } => &[],
-        };
-        let mut served: Vec<Served<'_>> = match self.name() {
-            Some(name) => own
-                .iter()
-                .map(|&interface| Served { name, interface })
-                .collect(),
-            None => Vec::new(),
-        };
-        let stations = match self {
-            DeviceConfig::Fastrak(d) => &d.stations[..],
-            DeviceConfig::InterSense(d) => &d.stations[..],
-            _ => &[],
-        };
-        for station in stations {
-            let interfaces: &[Interface] = match station {
-                StationDevice::Wand { .. } => &[Button, Analog],
-                StationDevice::Stylus { .. } | StationDevice::FtStylus { .. } => &[Button],
-            };
-            served.extend(interfaces.iter().map(|&interface| Served {
-                name: station.name(),
-                interface,
-            }));
-        }
-        served
+    fn build(&self, _cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        Err(Error::Unsupported("an unknown device type cannot be built"))
     }
-}
-
-/// A VRPN device interface: what a client opens a remote of (`TrackerRemote`, `ButtonRemote`,
-/// …) to read a device. One name may carry several interfaces, since each has its own message
-/// types; two devices serving the same interface under one name send indistinguishable reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Interface {
-    /// Poses, velocities and accelerations (`vrpn_Tracker`).
-    Tracker,
-    /// Button presses (`vrpn_Button`).
-    Button,
-    /// Analog channels (`vrpn_Analog`).
-    Analog,
-    /// Dial turns (`vrpn_Dial`).
-    Dial,
-    /// Text messages as the device's purpose (`vrpn_Text_Example`).
-    Text,
-}
-
-impl Interface {
-    /// The interface in lower case, as messages name it (`tracker`, `button`, …).
-    pub fn label(self) -> &'static str {
-        match self {
-            Interface::Tracker => "tracker",
-            Interface::Button => "button",
-            Interface::Analog => "analog",
-            Interface::Dial => "dial",
-            Interface::Text => "text sender",
-        }
-    }
-}
-
-impl fmt::Display for Interface {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.label())
-    }
-}
-
-/// One interface an entry serves, and the name it serves it under.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Served<'a> {
-    /// The device name clients open (`NAME@host`).
-    pub name: &'a str,
-    /// The interface.
-    pub interface: Interface,
 }
 
 /// Two entries (or two station devices of one entry) that serve the same interface under the
@@ -280,28 +103,37 @@ pub fn name_clashes(entries: &[DeviceEntry]) -> Vec<NameClash> {
 }
 
 /// One entry of `vrpn.cfg`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug)]
 pub struct DeviceEntry {
     /// Where the entry starts.
     pub location: SourceLocation,
     /// Last line the entry used (differs from `location.line` for multi-line entries).
     pub last_line: usize,
-    /// The keyword as written (for [`DeviceConfig::Unknown`], the unrecognised one).
+    /// The keyword as written (for an [`UnknownDevice`], the unrecognised one).
     pub keyword: String,
     /// The tokens after the keyword on the first line.
     pub args: Vec<String>,
-    /// The parsed configuration.
-    pub config: DeviceConfig,
+    /// The parsed configuration: the driver's own type, reached with
+    /// [`spec`](Self::spec), or an [`UnknownDevice`].
+    pub config: Box<dyn DeviceSpec>,
 }
 
 impl DeviceEntry {
-    /// For an [`DeviceConfig::Unknown`] entry, the error to report: C++ `vrpn_server` stops
-    /// with "Unknown Device" by default, and with `-warn` prints it and skips the line (print
-    /// this error followed by `, skipped`). `None` for known entries.
+    /// The configuration as the driver's type `T`, if it is one.
+    pub fn spec<T: DeviceSpec>(&self) -> Option<&T> {
+        self.config.downcast_ref::<T>()
+    }
+
+    /// True for the entry of a keyword no driver serves.
+    pub fn is_unknown(&self) -> bool {
+        self.spec::<UnknownDevice>().is_some()
+    }
+
+    /// For an [`UnknownDevice`] entry, the error to report: C++ `vrpn_server` stops with
+    /// "Unknown Device" by default, and with `-warn` prints it and skips the line (print this
+    /// error followed by `, skipped`). `None` for known entries.
     pub fn unknown_error(&self) -> Option<ConfigError> {
-        let DeviceConfig::Unknown { keyword, .. } = &self.config else {
-            return None;
-        };
+        let UnknownDevice { keyword, .. } = self.spec::<UnknownDevice>()?;
         let message = unknown_message(keyword);
         Some(ConfigError::at_line(
             ConfigErrorKind::UnknownDevice,
@@ -310,6 +142,11 @@ impl DeviceEntry {
             message,
         ))
     }
+}
+
+/// Every keyword a driver serves, in registry order.
+pub fn known_keywords() -> impl Iterator<Item = &'static str> {
+    REGISTRY.iter().flat_map(|d| d.keywords.iter().copied())
 }
 
 /// The explanation for an unknown keyword, with a hint where we can guess the intent.
@@ -326,29 +163,28 @@ fn unknown_message(keyword: &str) -> String {
              without BOM"
         );
     }
-    if KNOWN_KEYWORDS.contains(&keyword) {
+    if known_keywords().any(|k| k == keyword) {
         return format!(
             "{base}: a character other than a space or tab (such as a carriage return) follows \
              the keyword; separate it from its arguments with spaces or tabs"
         );
     }
-    if keyword == "vrpn_Tracker_IS900" {
-        return format!(
-            "{base}: VRPN has no such keyword; run an IS-900 with vrpn_Tracker_Fastrak NAME \
-             PORT BAUD IS900time (or vrpn_Tracker_InterSense)"
-        );
-    }
-    if let Some(known) = KNOWN_KEYWORDS
+    let hint = REGISTRY
         .iter()
-        .find(|k| k.eq_ignore_ascii_case(keyword))
-    {
+        .flat_map(|d| d.hints.iter())
+        .find(|h| h.keyword == keyword);
+    if let Some(hint) = hint {
+        return format!("{base}: {}", hint.text);
+    }
+    if let Some(known) = known_keywords().find(|k| k.eq_ignore_ascii_case(keyword)) {
         return format!("{base}: keywords are case-sensitive, did you mean {known}?");
     }
     base
 }
 
-/// Result of [`parse_str_lenient`](super::parse_str_lenient): the entries that parsed and the problems with the rest.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Result of [`parse_str_lenient`](super::parse_str_lenient): the entries that parsed and the
+/// problems with the rest.
+#[derive(Debug, Default)]
 pub struct ParseReport {
     /// Entries that parsed, in file order (unknown ones included).
     pub entries: Vec<DeviceEntry>,

@@ -1,52 +1,34 @@
-//! The top level of `vrpn.cfg`: reading a file, dispatching each entry to its parser, strict
-//! (default) and lenient (`-warn`) parsing.
+//! The top level of `vrpn.cfg`: reading a file, handing each entry to the driver that serves
+//! its keyword, strict (default) and lenient (`-warn`) parsing.
 
 use std::path::Path;
 
-use super::devices::*;
-use super::entry::{DeviceConfig, DeviceEntry, ParseReport};
-use super::error::{ConfigError, ConfigErrorKind, Ctx, SourceLocation};
-use super::fastrak::{parse_fastrak, parse_intersense};
-use super::fly::{parse_analog_fly, parse_button_fly};
-use super::lines::{classify_line, EntryTokens, LineClass, RawLine, Reader};
-use super::{kw, KNOWN_KEYWORDS};
+use super::entry::{DeviceEntry, ParseReport, UnknownDevice};
+use crate::config::lines::{classify_line, EntryTokens, LineClass, RawLine, Reader};
+use crate::config::{ConfigError, ConfigErrorKind, ConfigLine, SourceLocation};
+use crate::driver::registry::{find, DeviceSpec};
+use crate::drivers::REGISTRY;
 
 /// Parses the entry whose first line is `line`, reading block lines from `reader`.
-fn parse_entry(
-    file: &str,
-    line: RawLine<'_>,
-    tokens: &EntryTokens<'_>,
-    reader: &mut Reader<'_>,
+fn parse_entry<'t>(
+    file: &'t str,
+    line: RawLine<'t>,
+    tokens: EntryTokens<'t>,
+    reader: &mut Reader<'t>,
 ) -> Result<DeviceEntry, ConfigError> {
-    let ctx = Ctx::new(file, line.number, tokens.keyword);
-    let a = &tokens.args[..];
-    let known = KNOWN_KEYWORDS.contains(&tokens.keyword);
-    let config = if !known || (!tokens.matchable && !a.is_empty()) {
+    let keyword = tokens.keyword.to_owned();
+    let args: Vec<String> = tokens.args.iter().map(|s| (*s).to_owned()).collect();
+    let driver = find(REGISTRY, tokens.keyword);
+    let config: Box<dyn DeviceSpec> = match driver {
         // C++ prints "Unknown Device" for it. A known keyword alone on its line is also
-        // "unknown" to C++; it falls through to the argument-count error below instead.
-        DeviceConfig::Unknown {
-            keyword: tokens.keyword.to_owned(),
-            args: a.iter().map(|s| (*s).to_owned()).collect(),
+        // "unknown" to C++; it falls through to the argument-count error instead.
+        Some(driver) if tokens.matchable || args.is_empty() => {
+            (driver.parse)(&mut ConfigLine::new(file, line.number, tokens, reader))?
         }
-    } else {
-        match tokens.keyword {
-            kw::TRACKER_NULL => parse_tracker_null(&ctx, a)?,
-            kw::TRACKER_SPIN => parse_tracker_spin(&ctx, a)?,
-            kw::BUTTON_EXAMPLE => parse_button_example(&ctx, a)?,
-            kw::DIAL_EXAMPLE => parse_dial_example(&ctx, a)?,
-            kw::ANALOG_EXAMPLE => parse_analog_example(&ctx, a)?,
-            kw::TEXT_EXAMPLE => parse_text_example(&ctx, a, tokens.rest)?,
-            kw::ANALOG_FLY => parse_analog_fly(&ctx, a, reader)?,
-            kw::BUTTON_FLY => parse_button_fly(&ctx, a, reader)?,
-            kw::JOYLIN => parse_joylin(&ctx, a)?,
-            kw::FASTRAK => parse_fastrak(&ctx, tokens.rest, reader)?,
-            kw::INTERSENSE => parse_intersense(&ctx, tokens.rest, reader)?,
-            kw::FLOCK => parse_flock(&ctx, a)?,
-            kw::FLOCK_PARALLEL => parse_flock_parallel(&ctx, a)?,
-            kw::MAGELLAN => parse_magellan(&ctx, a)?,
-            kw::CEREALBOX => parse_cerealbox(&ctx, a)?,
-            _ => parse_dyna(&ctx, a)?,
-        }
+        _ => Box::new(UnknownDevice {
+            keyword: keyword.clone(),
+            args: args.clone(),
+        }),
     };
     Ok(DeviceEntry {
         location: SourceLocation {
@@ -54,8 +36,8 @@ fn parse_entry(
             line: line.number,
         },
         last_line: reader.last_number.max(line.number),
-        keyword: tokens.keyword.to_owned(),
-        args: a.iter().map(|s| (*s).to_owned()).collect(),
+        keyword,
+        args,
         config,
     })
 }
@@ -66,7 +48,7 @@ fn parse_all(text: &str, file: &str, stop_at_first_error: bool) -> ParseReport {
     let mut reader = Reader::new(text, file);
     while let Some(next) = reader.next_raw() {
         let result = next.and_then(|line| match classify_line(line.text) {
-            LineClass::Entry(tokens) => parse_entry(file, line, &tokens, &mut reader).map(Some),
+            LineClass::Entry(tokens) => parse_entry(file, line, tokens, &mut reader).map(Some),
             LineClass::Short | LineClass::Comment => Ok(None),
         });
         match result {
@@ -86,8 +68,8 @@ fn parse_all(text: &str, file: &str, stop_at_first_error: bool) -> ParseReport {
 /// Parses `vrpn.cfg` text; `file_name` is used in locations and messages.
 ///
 /// Stops at the first malformed entry, like C++ `vrpn_server` without `-warn`. Unknown
-/// keywords are returned as [`DeviceConfig::Unknown`] entries for the caller to refuse (C++
-/// default) or skip with a warning (`-warn`), see [`DeviceEntry::unknown_error`].
+/// keywords are returned as [`UnknownDevice`] entries for the caller to refuse (C++ default)
+/// or skip with a warning (`-warn`), see [`DeviceEntry::unknown_error`].
 pub fn parse_str(text: &str, file_name: &str) -> Result<Vec<DeviceEntry>, ConfigError> {
     let mut report = parse_all(text, file_name, true);
     match report.errors.pop() {

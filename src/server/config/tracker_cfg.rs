@@ -3,11 +3,10 @@
 
 use std::path::Path;
 
-use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fields::{f32_field, uint_in};
-use super::lines::{c_tokens, is_c_space, Reader};
 use super::parse::read_config_text;
-use super::MAX_TRACKER_SENSORS;
+use crate::config::fields::{f32_field, uint_in};
+use crate::config::lines::{c_tokens, is_c_space, Reader};
+use crate::config::{ConfigError, ConfigErrorKind, Ctx, MAX_TRACKER_SENSORS};
 
 /// Default name of the per-tracker transform file, looked up in the working directory.
 pub const TRACKER_CFG_FILE: &str = "vrpn_Tracker.cfg";

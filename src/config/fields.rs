@@ -1,19 +1,14 @@
 //! Field parsers shared by every entry: counts, numbers, rates, baud rates, names and
 //! references, each failing with an error that names the field and the offending token.
 
+use super::device_ref::DeviceRef;
 use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fly::DeviceRef;
 use super::BAUD_RATES;
 use crate::time::{checked_duration, period_of_rate, MAX_PERIOD};
 use crate::wire::MAX_NAME_LEN;
 
 /// Fails unless `args` has at least `min` tokens; `usage` names them.
-pub(super) fn need(
-    ctx: &Ctx<'_>,
-    args: &[&str],
-    min: usize,
-    usage: &str,
-) -> Result<(), ConfigError> {
+pub fn need(ctx: &Ctx<'_>, args: &[&str], min: usize, usage: &str) -> Result<(), ConfigError> {
     if args.len() >= min {
         return Ok(());
     }
@@ -28,13 +23,7 @@ pub(super) fn need(
 }
 
 /// A whole number in `lo..=hi`.
-pub(super) fn int_in(
-    ctx: &Ctx<'_>,
-    field: &str,
-    tok: &str,
-    lo: i64,
-    hi: i64,
-) -> Result<i64, ConfigError> {
+pub fn int_in(ctx: &Ctx<'_>, field: &str, tok: &str, lo: i64, hi: i64) -> Result<i64, ConfigError> {
     use std::num::IntErrorKind;
     let range = || {
         ctx.err(
@@ -61,7 +50,7 @@ pub(super) fn int_in(
 }
 
 /// A whole number in `lo..=hi`, as `u32` (callers pass non-negative bounds).
-pub(super) fn uint_in(
+pub fn uint_in(
     ctx: &Ctx<'_>,
     field: &str,
     tok: &str,
@@ -78,13 +67,13 @@ pub(super) fn uint_in(
 }
 
 /// Any whole number that fits a C `int`.
-pub(super) fn any_int(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<i32, ConfigError> {
+pub fn any_int(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<i32, ConfigError> {
     let v = int_in(ctx, field, tok, i64::from(i32::MIN), i64::from(i32::MAX))?;
     Ok(i32::try_from(v).unwrap_or_default())
 }
 
 /// A finite number read as C++ reads `%f`/`%g`: the nearest `f32`.
-pub(super) fn f32_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn f32_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     match tok.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(ctx.err(
@@ -99,7 +88,7 @@ pub(super) fn f32_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, Co
 }
 
 /// A finite number read as C++ reads `%lf`.
-pub(super) fn f64_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f64, ConfigError> {
+pub fn f64_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f64, ConfigError> {
     match tok.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(ctx.err(
@@ -114,7 +103,7 @@ pub(super) fn f64_field(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f64, Co
 }
 
 /// A rate or period that must be greater than zero.
-pub(super) fn positive(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn positive(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     let v = f32_field(ctx, field, tok)?;
     if v > 0.0 {
         Ok(v)
@@ -127,7 +116,7 @@ pub(super) fn positive(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, Con
 }
 
 /// A rate that may be zero (the fly trackers then use a 1-second interval).
-pub(super) fn non_negative(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn non_negative(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     let v = f32_field(ctx, field, tok)?;
     if v >= 0.0 {
         Ok(v)
@@ -141,14 +130,14 @@ pub(super) fn non_negative(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32,
 
 /// A report rate (per second) greater than 0 that a schedule can use: at least one report per
 /// [`MAX_PERIOD`] (a smaller rate would panic in `Duration` arithmetic or never report).
-pub(super) fn rate(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn rate(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     let v = positive(ctx, field, tok)?;
     schedulable(ctx, field, tok, period_of_rate(f64::from(v)).is_some())?;
     Ok(v)
 }
 
 /// A report rate that may also be 0 (the fly trackers then use a 1-second interval).
-pub(super) fn rate_or_zero(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn rate_or_zero(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     let v = non_negative(ctx, field, tok)?;
     schedulable(
         ctx,
@@ -160,7 +149,7 @@ pub(super) fn rate_or_zero(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32,
 }
 
 /// A period in seconds, greater than 0 and at most [`MAX_PERIOD`].
-pub(super) fn period(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+pub fn period(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
     let v = positive(ctx, field, tok)?;
     if checked_duration(f64::from(v)).is_none() {
         return Err(ctx.err(
@@ -189,7 +178,7 @@ fn schedulable(ctx: &Ctx<'_>, field: &str, tok: &str, ok: bool) -> Result<(), Co
 }
 
 /// A baud rate from [`BAUD_RATES`].
-pub(super) fn baud(ctx: &Ctx<'_>, tok: &str) -> Result<u32, ConfigError> {
+pub fn baud(ctx: &Ctx<'_>, tok: &str) -> Result<u32, ConfigError> {
     let v = int_in(ctx, "baud", tok, i64::from(i32::MIN), i64::from(i32::MAX))?;
     match BAUD_RATES.iter().find(|&&b| i64::from(b) == v) {
         Some(&b) => Ok(b),
@@ -204,7 +193,7 @@ pub(super) fn baud(ctx: &Ctx<'_>, tok: &str) -> Result<u32, ConfigError> {
 }
 
 /// A device name this server will publish under.
-pub(super) fn device_name(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<String, ConfigError> {
+pub fn device_name(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<String, ConfigError> {
     if tok.contains('@') {
         return Err(ctx.err(
             ConfigErrorKind::BadName,
@@ -227,7 +216,7 @@ pub(super) fn device_name(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<Strin
 }
 
 /// A reference to another device; `NULL` gives `None` when `allow_null`.
-pub(super) fn device_ref(
+pub fn device_ref(
     ctx: &Ctx<'_>,
     field: &str,
     tok: &str,
@@ -248,7 +237,7 @@ pub(super) fn device_ref(
 }
 
 /// Fails unless a block line has at least `n` values after its keyword `line_kw`.
-pub(super) fn block_need(
+pub fn block_need(
     ctx: &Ctx<'_>,
     line_kw: &str,
     t: &[&str],
@@ -358,7 +347,7 @@ mod tests {
         assert!(DeviceRef::parse("@host").is_err());
         assert!(DeviceRef::parse("M0@").is_err());
         assert!(DeviceRef::parse("*M0@host").is_err());
-        let e = DeviceRef::parse("M0").unwrap_err();
+        let e = DeviceRef::parse("M0").unwrap_err().to_string();
         assert!(e.contains("*M0") && e.contains("M0@host"), "{e}");
         assert_eq!(DeviceRef::Local("M0".into()).to_string(), "*M0");
         assert_eq!(DeviceRef::Local("M0".into()).name(), "M0");

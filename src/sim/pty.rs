@@ -19,7 +19,7 @@ use nix::fcntl::OFlag;
 use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
 use nix::sys::termios;
 
-use super::testing::DeviceModel;
+use super::line::DeviceModel;
 use crate::time::Now;
 
 fn errno(e: nix::errno::Errno) -> io::Error {

@@ -7,7 +7,7 @@ use std::fmt::{self, Write as _};
 const CAPACITY: usize = 320;
 
 /// Formats `args` into a fixed buffer and hands the text to `send`.
-pub(crate) fn with_text(args: fmt::Arguments<'_>, send: impl FnOnce(&str)) {
+pub fn with_text(args: fmt::Arguments<'_>, send: impl FnOnce(&str)) {
     let mut text = TextBuf {
         buf: [0; CAPACITY],
         len: 0,
@@ -17,7 +17,7 @@ pub(crate) fn with_text(args: fmt::Arguments<'_>, send: impl FnOnce(&str)) {
 }
 
 /// A byte as it is shown in messages: the character if printable, else its hex value.
-pub(crate) struct Shown(pub u8);
+pub struct Shown(pub u8);
 
 impl fmt::Display for Shown {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -30,7 +30,7 @@ impl fmt::Display for Shown {
 }
 
 /// Bytes as they are shown in messages: printable ASCII as it is, the rest escaped.
-pub(crate) struct ShownBytes<'a>(pub &'a [u8]);
+pub struct ShownBytes<'a>(pub &'a [u8]);
 
 impl fmt::Display for ShownBytes<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -1,69 +1,35 @@
-//! The layered fly trackers, `vrpn_Tracker_AnalogFly` and `vrpn_Tracker_ButtonFly`: the
-//! references to the devices they read, their typed configurations and their block parsers.
+//! The layered fly trackers as `vrpn.cfg` entries, `vrpn_Tracker_AnalogFly` and
+//! `vrpn_Tracker_ButtonFly`: the references to the devices they read, their typed
+//! configurations, their block parsers and their registry entries.
 
-use std::fmt;
+use crate::config::fields::{block_need, device_ref, f32_field, uint_in};
+use crate::config::lines::c_tokens;
+use crate::config::{
+    ConfigError, ConfigErrorKind, ConfigLine, Ctx, DeviceRef, MAX_BUTTONS, MAX_CHANNELS,
+};
+use crate::devices::ServerDevice;
+use crate::driver::registry::{BuildContext, DeviceSpec, Driver, Interface, Served};
+use crate::error::Error;
 
-use super::entry::DeviceConfig;
-use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fields::{block_need, device_name, device_ref, f32_field, need, rate_or_zero, uint_in};
-use super::lines::{c_tokens, Reader};
-use super::{kw, MAX_BUTTONFLY_AXES, MAX_BUTTONFLY_NAME, MAX_BUTTONS, MAX_CHANNELS};
+/// Most axis lines in one ButtonFly block.
+pub const MAX_BUTTONFLY_AXES: usize = 200;
 
-/// A reference from a layered device to the device it reads.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub enum DeviceRef {
-    /// `*NAME`: a device served by this same server (the `*` is not stored).
-    Local(String),
-    /// `NAME@host[:port]`: a device on another server, stored whole.
-    Remote(String),
-}
+/// Longest device name in a ButtonFly axis line.
+pub const MAX_BUTTONFLY_NAME: usize = 199;
 
-impl DeviceRef {
-    /// Parses `*NAME` or `NAME@host`; the error explains what is wrong (without the token).
-    pub fn parse(tok: &str) -> Result<DeviceRef, String> {
-        if let Some(name) = tok.strip_prefix('*') {
-            if name.is_empty() {
-                return Err("has nothing after the '*'; write *NAME".to_owned());
-            }
-            if name.contains('@') {
-                return Err("mixes '*' (this server) with '@' (another server)".to_owned());
-            }
-            return Ok(DeviceRef::Local(name.to_owned()));
-        }
-        match tok.split_once('@') {
-            Some((dev, host)) if !dev.is_empty() && !host.is_empty() => {
-                Ok(DeviceRef::Remote(tok.to_owned()))
-            }
-            Some(_) => Err("must have a device name before and a host after the '@'".to_owned()),
-            None => Err(format!(
-                "must be *{tok} (a device of this server) or {tok}@host (a device on another \
-                 server)"
-            )),
-        }
-    }
+/// `vrpn_Tracker_AnalogFly`.
+pub static ANALOG_FLY: Driver = Driver {
+    keywords: &["vrpn_Tracker_AnalogFly"],
+    parse: parse_analog_fly,
+    hints: &[],
+};
 
-    /// The name to open a remote with: the local name without `*`, or the full remote name.
-    pub fn name(&self) -> &str {
-        match self {
-            DeviceRef::Local(n) | DeviceRef::Remote(n) => n,
-        }
-    }
-
-    /// Whether the device is served by this same server.
-    pub fn is_local(&self) -> bool {
-        matches!(self, DeviceRef::Local(_))
-    }
-}
-
-impl fmt::Display for DeviceRef {
-    /// Writes the reference as it appears in `vrpn.cfg`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DeviceRef::Local(n) => write!(f, "*{n}"),
-            DeviceRef::Remote(n) => f.write_str(n),
-        }
-    }
-}
+/// `vrpn_Tracker_ButtonFly`.
+pub static BUTTON_FLY: Driver = Driver {
+    keywords: &["vrpn_Tracker_ButtonFly"],
+    parse: parse_button_fly,
+    hints: &[],
+};
 
 /// A button of another device.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -244,21 +210,15 @@ pub struct ButtonFly {
 // AnalogFly block
 // ---------------------------------------------------------------------------------------------
 
-pub(super) fn parse_analog_fly(
-    ctx: &Ctx<'_>,
-    a: &[&str],
-    reader: &mut Reader<'_>,
-) -> Result<DeviceConfig, ConfigError> {
-    need(ctx, a, 3, "name, update_rate, absolute|differential")?;
-    let name = device_name(ctx, "name", a[0])?;
-    let update_rate = rate_or_zero(ctx, "update_rate", a[1])?;
-    let mode = FlyMode::parse(a[2]).ok_or_else(|| {
-        ctx.err(
+fn parse_analog_fly(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    line.need(3, "name, update_rate, absolute|differential")?;
+    let name = line.name(0)?;
+    let update_rate = line.rate_or_zero(1, "update_rate")?;
+    let third = line.word(2)?;
+    let mode = FlyMode::parse(third).ok_or_else(|| {
+        line.err(
             ConfigErrorKind::BadValue,
-            format!(
-                "the third argument must be 'absolute' or 'differential', found '{}'",
-                a[2]
-            ),
+            format!("the third argument must be 'absolute' or 'differential', found '{third}'"),
         )
     })?;
     let mut fly = AnalogFly {
@@ -270,21 +230,22 @@ pub(super) fn parse_analog_fly(
         reset: None,
         clutch: None,
     };
+    let ctx = line.ctx();
     let block = Ctx::new(
         ctx.file,
         ctx.line,
-        format!("{} {}", kw::ANALOG_FLY, fly.name),
+        format!("{} {}", line.keyword(), fly.name),
     );
     loop {
-        let line = reader.block_line(
+        let next = line.block_line_in(
             &block,
             "the empty line that must end the block (add an empty line after its last line)",
         )?;
         // Only a truly empty line ends the block (not blanks, not "\r\n").
-        if line.text.starts_with('\n') {
-            return Ok(DeviceConfig::AnalogFly(Box::new(fly)));
+        if next.text.starts_with('\n') {
+            return Ok(Box::new(fly));
         }
-        analog_fly_line(&block.at(line.number), &c_tokens(line.text), &mut fly)?;
+        analog_fly_line(&block.at(next.number), &c_tokens(next.text), &mut fly)?;
     }
 }
 
@@ -345,28 +306,25 @@ fn button_line(ctx: &Ctx<'_>, what: &str, t: &[&str]) -> Result<Option<ButtonRef
 // ButtonFly block
 // ---------------------------------------------------------------------------------------------
 
-pub(super) fn parse_button_fly(
-    ctx: &Ctx<'_>,
-    a: &[&str],
-    reader: &mut Reader<'_>,
-) -> Result<DeviceConfig, ConfigError> {
-    need(ctx, a, 2, "name, update_rate")?;
+fn parse_button_fly(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    line.need(2, "name, update_rate")?;
     let mut fly = ButtonFly {
-        name: device_name(ctx, "name", a[0])?,
-        update_rate: rate_or_zero(ctx, "update_rate", a[1])?,
+        name: line.name(0)?,
+        update_rate: line.rate_or_zero(1, "update_rate")?,
         axes: Vec::new(),
         vel_scale: None,
         rot_scale: None,
     };
+    let ctx = line.ctx();
     let block = Ctx::new(
         ctx.file,
         ctx.line,
-        format!("{} {}", kw::BUTTON_FLY, fly.name),
+        format!("{} {}", line.keyword(), fly.name),
     );
     loop {
-        let line = reader.block_line(&block, "the 'end' line that must close the block")?;
-        let here = block.at(line.number);
-        let t = c_tokens(line.text);
+        let next = line.block_line_in(&block, "the 'end' line that must close the block")?;
+        let here = block.at(next.number);
+        let t = c_tokens(next.text);
         match t.first().copied() {
             None => {
                 return Err(here.err(
@@ -374,7 +332,7 @@ pub(super) fn parse_button_fly(
                     "empty line inside the block; remove it (the block ends at a line 'end')",
                 ))
             }
-            Some("end") => return Ok(DeviceConfig::ButtonFly(fly)),
+            Some("end") => return Ok(Box::new(fly)),
             Some(m @ ("absolute" | "differential")) => {
                 if fly.axes.len() >= MAX_BUTTONFLY_AXES {
                     return Err(here.err(
@@ -446,6 +404,36 @@ fn scale_analog(ctx: &Ctx<'_>, what: &str, t: &[&str]) -> Result<Option<ScaleAna
         scale: f32_field(ctx, &format!("{what} scale"), t[3])?,
         power: f32_field(ctx, &format!("{what} power"), t[4])?,
     }))
+}
+
+impl DeviceSpec for AnalogFly {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn served(&self) -> Vec<Served<'_>> {
+        Served::all(&self.name, &[Interface::Tracker])
+    }
+    fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        Ok(vec![Box::new(super::TrackerAnalogFly::new(
+            self,
+            cx.conn(),
+        )?)])
+    }
+}
+
+impl DeviceSpec for ButtonFly {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn served(&self) -> Vec<Served<'_>> {
+        Served::all(&self.name, &[Interface::Tracker])
+    }
+    fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        Ok(vec![Box::new(super::TrackerButtonFly::new(
+            self,
+            cx.conn(),
+        )?)])
+    }
 }
 
 #[cfg(test)]

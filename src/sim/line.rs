@@ -10,7 +10,7 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use super::driver::{PortOp, PortOps, SerialDriver};
+use crate::serial::{PortOp, PortOps, SerialDriver};
 use crate::time::Now;
 
 /// The device end of a serial line: what a simulator implements.
@@ -416,7 +416,7 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLines<D, M> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::serial::driver::{PortKind, PortSettings};
+    use crate::serial::{PortKind, PortSettings};
     use crate::time::TimeVal;
 
     /// Writes `R` when opened; records each byte with its arrival time.

@@ -5,7 +5,7 @@ use std::fmt;
 /// Where an entry or a problem is in a configuration file.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct SourceLocation {
-    /// The file name as given to the parser (a path for [`parse_file`](super::parse_file)).
+    /// The file name as given to the parser (a path for [`parse_file`](crate::server::config::parse_file)).
     pub file: String,
     /// 1-based line number.
     pub line: usize,
@@ -38,13 +38,14 @@ pub enum ConfigErrorKind {
     BadName,
     /// Two entries define the same device name. The parser no longer reports this: one name
     /// may serve several interfaces, and a repeated interface is only warned about (see
-    /// [`super::name_clashes`]). Kept so that existing matches still compile.
+    /// [`crate::server::config::name_clashes`]). Kept so that existing matches still compile.
     DuplicateName,
     /// A multi-line entry is not closed before the end of the file.
     UnclosedBlock,
     /// A line inside a multi-line entry is malformed.
     BadBlockLine,
-    /// The keyword is not one we know (see [`DeviceEntry::unknown_error`](super::DeviceEntry::unknown_error)).
+    /// The keyword is not one we know (see
+    /// [`DeviceEntry::unknown_error`](crate::server::config::DeviceEntry::unknown_error)).
     UnknownDevice,
     /// `vrpn_Tracker.cfg` has no entry for the requested tracker.
     TrackerNotFound,
@@ -115,15 +116,22 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
-/// Error context: file, line and what is being parsed (e.g. `vrpn_Tracker_NULL`).
-pub(super) struct Ctx<'a> {
-    pub(super) file: &'a str,
-    pub(super) line: usize,
-    pub(super) what: String,
+/// Error context: file, line and what is being parsed (e.g. `vrpn_Tracker_NULL`); its
+/// [`err`](Self::err) makes a [`ConfigError`] that names all three.
+#[derive(Clone, Debug)]
+pub struct Ctx<'a> {
+    /// The file name, as given to the parser.
+    pub file: &'a str,
+    /// The 1-based line.
+    pub line: usize,
+    /// What is being parsed (the keyword, or the keyword and the device name in a block);
+    /// every message starts with it.
+    pub what: String,
 }
 
 impl<'a> Ctx<'a> {
-    pub(super) fn new(file: &'a str, line: usize, what: impl Into<String>) -> Self {
+    /// The context of `what` at `line` of `file`.
+    pub fn new(file: &'a str, line: usize, what: impl Into<String>) -> Self {
         Ctx {
             file,
             line,
@@ -132,11 +140,12 @@ impl<'a> Ctx<'a> {
     }
 
     /// The same context at another line (inside a block).
-    pub(super) fn at(&self, line: usize) -> Ctx<'a> {
+    pub fn at(&self, line: usize) -> Ctx<'a> {
         Ctx::new(self.file, line, self.what.clone())
     }
 
-    pub(super) fn err(&self, kind: ConfigErrorKind, message: impl fmt::Display) -> ConfigError {
+    /// An error here: `FILE:LINE: WHAT: message`.
+    pub fn err(&self, kind: ConfigErrorKind, message: impl fmt::Display) -> ConfigError {
         ConfigError::at_line(
             kind,
             self.file,

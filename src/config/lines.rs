@@ -69,27 +69,29 @@ pub fn classify_line(line: &str) -> LineClass<'_> {
 
 /// One physical line: its number and text (newline included, if the file had one).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct RawLine<'a> {
-    pub(super) number: usize,
-    pub(super) text: &'a str,
+pub struct RawLine<'a> {
+    /// 1-based line number.
+    pub number: usize,
+    /// The text, newline included.
+    pub text: &'a str,
 }
 
 impl<'a> RawLine<'a> {
     /// The text without its newline.
-    pub(super) fn content(&self) -> &'a str {
+    pub fn content(&self) -> &'a str {
         self.text.strip_suffix('\n').unwrap_or(self.text)
     }
 }
 
 /// Reads physical lines, enforcing the line-length limit.
-pub(super) struct Reader<'a> {
+pub(crate) struct Reader<'a> {
     file: &'a str,
     lines: std::iter::Enumerate<std::str::SplitInclusive<'a, char>>,
-    pub(super) last_number: usize,
+    pub(crate) last_number: usize,
 }
 
 impl<'a> Reader<'a> {
-    pub(super) fn new(text: &'a str, file: &'a str) -> Self {
+    pub fn new(text: &'a str, file: &'a str) -> Self {
         Reader {
             file,
             lines: text.split_inclusive('\n').enumerate(),
@@ -97,7 +99,7 @@ impl<'a> Reader<'a> {
         }
     }
 
-    pub(super) fn next_raw(&mut self) -> Option<Result<RawLine<'a>, ConfigError>> {
+    pub fn next_raw(&mut self) -> Option<Result<RawLine<'a>, ConfigError>> {
         let (index, text) = self.lines.next()?;
         let number = index + 1;
         self.last_number = number;
@@ -118,11 +120,7 @@ impl<'a> Reader<'a> {
 
     /// The next line of a block started at `ctx`; the end of the file is an error that says
     /// what was expected (`closing`).
-    pub(super) fn block_line(
-        &mut self,
-        ctx: &Ctx<'_>,
-        closing: &str,
-    ) -> Result<RawLine<'a>, ConfigError> {
+    pub fn block_line(&mut self, ctx: &Ctx<'_>, closing: &str) -> Result<RawLine<'a>, ConfigError> {
         match self.next_raw() {
             Some(line) => line,
             None => Err(ctx.err(
@@ -137,7 +135,7 @@ impl<'a> Reader<'a> {
 }
 
 /// The text of `rest` from its `n`th token (0-based) on, blanks around it removed.
-pub(super) fn from_token(rest: &str, n: usize) -> &str {
+pub fn from_token(rest: &str, n: usize) -> &str {
     let mut s = rest.trim_start_matches(is_c_space);
     for _ in 0..n {
         let end = s.find(is_c_space).unwrap_or(s.len());

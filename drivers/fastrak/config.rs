@@ -1,11 +1,18 @@
 //! `vrpn_Tracker_Fastrak` and `vrpn_Tracker_InterSense`: the trackers whose entries continue
-//! over `\\` (reset command) and `/` (station device) lines, with their wands and styluses.
+//! over `\\` (reset command) and `/` (station device) lines, with their wands and styluses;
+//! what they serve and how they are built.
 
-use super::entry::DeviceConfig;
-use super::error::{ConfigError, ConfigErrorKind, Ctx};
-use super::fields::{baud, block_need, device_name, f64_field, need, uint_in};
-use super::lines::{c_tokens, is_c_space, Reader};
-use super::MAX_RESET_COMMANDS;
+use super::FastrakDriver;
+use crate::config::fields::{baud, block_need, device_name, f64_field, need, uint_in};
+use crate::config::lines::{c_tokens, is_c_space};
+use crate::config::{ConfigError, ConfigErrorKind, ConfigLine, Ctx};
+use crate::devices::ServerDevice;
+use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
+use crate::driver::serve_port;
+use crate::error::Error;
+
+/// Longest combined reset-command string, in bytes.
+pub const MAX_RESET_COMMANDS: usize = 2048;
 
 /// One step of the extra reset sequence of a Fastrak / InterSense entry (`\` lines).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -88,7 +95,7 @@ pub struct Fastrak {
     pub name: String,
     /// Serial port, passed to the OS unchanged.
     pub port: String,
-    /// Baud rate, one of [`BAUD_RATES`](super::BAUD_RATES).
+    /// Baud rate, one of [`BAUD_RATES`](crate::config::BAUD_RATES).
     pub baud: u32,
     /// IS-900 hardware timestamps (an option token starting with `IS900time`).
     pub is900_timestamps: bool,
@@ -163,35 +170,34 @@ struct Continuations {
 }
 
 fn read_continuations(
-    ctx: &Ctx<'_>,
+    line: &mut ConfigLine<'_, '_>,
     mut cont: Option<char>,
     stations_max: u32,
-    reader: &mut Reader<'_>,
 ) -> Result<Continuations, ConfigError> {
+    let ctx = &line.ctx().clone();
     let mut out = Continuations {
         reset_commands: Vec::new(),
         stations: Vec::new(),
     };
     let mut reset_len = 0usize;
     while cont == Some('\\') {
-        let line = reader.block_line(ctx, "the reset command promised by the trailing '\\'")?;
-        let (body, next) = split_continuation(line.content());
+        let next_line = line.block_line("the reset command promised by the trailing '\\'")?;
+        let (body, next) = split_continuation(next_line.content());
         reset_len += body.len() + 1;
         if reset_len > MAX_RESET_COMMANDS {
-            return Err(ctx.at(line.number).err(
+            return Err(ctx.at(next_line.number).err(
                 ConfigErrorKind::BadBlockLine,
                 format!("reset commands exceed {MAX_RESET_COMMANDS} characters in total"),
             ));
         }
         out.reset_commands
-            .push(reset_step(&ctx.at(line.number), body)?);
+            .push(reset_step(&ctx.at(next_line.number), body)?);
         cont = next;
     }
     while cont == Some('/') {
-        let line =
-            reader.block_line(ctx, "the station device line promised by the trailing '/'")?;
-        let (body, next) = split_continuation(line.content());
-        let here = ctx.at(line.number);
+        let next_line = line.block_line("the station device line promised by the trailing '/'")?;
+        let (body, next) = split_continuation(next_line.content());
+        let here = ctx.at(next_line.number);
         let station = station_device(&here, &c_tokens(body), stations_max)?;
         if let Some(other) = out.stations.iter().find(|s| s.sensor() == station.sensor()) {
             return Err(here.err(
@@ -284,10 +290,10 @@ fn wand_clip(ctx: &Ctx<'_>, channel: usize, t: &[&str]) -> Result<WandClip, Conf
 }
 
 pub(super) fn parse_fastrak(
-    ctx: &Ctx<'_>,
-    rest: &str,
-    reader: &mut Reader<'_>,
-) -> Result<DeviceConfig, ConfigError> {
+    line: &mut ConfigLine<'_, '_>,
+) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    let ctx = &line.ctx().clone();
+    let rest = line.rest();
     let (head, cont) = split_continuation(rest.strip_suffix('\n').unwrap_or(rest));
     let a = c_tokens(head);
     need(ctx, &a, 3, "name, port, baud, [IS900time | / | \\]")?;
@@ -305,8 +311,8 @@ pub(super) fn parse_fastrak(
             ))
         }
     };
-    let more = read_continuations(ctx, cont, Fastrak::STATIONS, reader)?;
-    Ok(DeviceConfig::Fastrak(Fastrak {
+    let more = read_continuations(line, cont, Fastrak::STATIONS)?;
+    Ok(Box::new(Fastrak {
         name,
         port,
         baud,
@@ -317,10 +323,10 @@ pub(super) fn parse_fastrak(
 }
 
 pub(super) fn parse_intersense(
-    ctx: &Ctx<'_>,
-    rest: &str,
-    reader: &mut Reader<'_>,
-) -> Result<DeviceConfig, ConfigError> {
+    line: &mut ConfigLine<'_, '_>,
+) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    let ctx = &line.ctx().clone();
+    let rest = line.rest();
     let (head, cont) = split_continuation(rest.strip_suffix('\n').unwrap_or(rest));
     let a = c_tokens(head);
     need(
@@ -359,8 +365,8 @@ pub(super) fn parse_intersense(
             }
         }
     }
-    let more = read_continuations(ctx, cont, InterSense::STATIONS, reader)?;
-    Ok(DeviceConfig::InterSense(InterSense {
+    let more = read_continuations(line, cont, InterSense::STATIONS)?;
+    Ok(Box::new(InterSense {
         name,
         port,
         is900_timestamps,
@@ -368,6 +374,54 @@ pub(super) fn parse_intersense(
         reset_commands: more.reset_commands,
         stations: more.stations,
     }))
+}
+
+/// Every (name, interface) pair of a tracker and its station devices.
+fn served_with_stations<'a>(name: &'a str, stations: &'a [StationDevice]) -> Vec<Served<'a>> {
+    let mut served = Served::all(name, &[Interface::Tracker]);
+    for station in stations {
+        let interfaces: &[Interface] = match station {
+            StationDevice::Wand { .. } => &[Interface::Button, Interface::Analog],
+            StationDevice::Stylus { .. } | StationDevice::FtStylus { .. } => &[Interface::Button],
+        };
+        served.extend(Served::all(station.name(), interfaces));
+    }
+    served
+}
+
+impl DeviceSpec for Fastrak {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn served(&self) -> Vec<Served<'_>> {
+        served_with_stations(&self.name, &self.stations)
+    }
+
+    fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        let driver = FastrakDriver::new(self, cx.conn())?;
+        Ok(vec![serve_port(&self.port, driver, cx)])
+    }
+}
+
+impl DeviceSpec for InterSense {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn served(&self) -> Vec<Served<'_>> {
+        served_with_stations(&self.name, &self.stations)
+    }
+
+    /// Refused: C++ serves this keyword through InterSense's own library.
+    fn build(&self, _cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        Err(Error::Unsupported(
+            "vrpn_Tracker_InterSense needs InterSense's own library, which this server does \
+             not use; an IS-600 or IS-900 in Fastrak mode is served by a vrpn_Tracker_Fastrak \
+             line (with IS900time for its clock, Wand and Stylus lines for its buttons and \
+             analogs)",
+        ))
+    }
 }
 
 #[cfg(test)]
