@@ -59,6 +59,14 @@ pub struct Now {
 pub trait TimeSource {
     /// The time.
     fn now(&self) -> Now;
+
+    /// A reading no earlier than anything read so far in the pass, for the timestamps clock
+    /// synchronisation needs on the far side of a read (its bound assumes a reply's `t2` and
+    /// `t4` are taken after the bytes arrived). The shell's pass clock reads the clocks again;
+    /// a [`Now`] (virtual time) gives itself.
+    fn fresh(&self) -> Now {
+        self.now()
+    }
 }
 
 impl TimeSource for Now {

@@ -628,7 +628,8 @@ impl Session {
             let Ok(q) = Query::decode(payload) else {
                 return None;
             };
-            let at = now.now().wall;
+            // t2 and t3: after the query's bytes were read (the pass's clock may be older).
+            let at = now.fresh().wall;
             let reply = Reply::answer(&q, at, at);
             let mut buf = [0u8; Reply::LEN];
             let n = reply.encode(&mut buf);
@@ -644,7 +645,8 @@ impl Session {
                 return None;
             };
             if let Some(c) = p.clock.as_deref_mut() {
-                c.handle_reply(&r, now.now());
+                // t4: after the reply's bytes were read.
+                c.handle_reply(&r, now.fresh());
                 p.clock_pass = None;
                 self.timeouts_changed();
             }
