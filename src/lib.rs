@@ -103,8 +103,8 @@ pub mod time;
 pub mod wire;
 
 pub use connection::{
-    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, Limits, Notice, ServiceClass,
-    Severity,
+    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, DropReason, Limits, NameKind,
+    Notice, NoticeKind, ServiceClass, Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
 pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};

@@ -9,7 +9,7 @@ use super::errors::{out_of_range, publish};
 use crate::server::limits::{self, Interface};
 
 /// The integer `obj` holds (`None` when it is beyond `i128`), or `TypeError` if it is none.
-fn int_value(obj: &Bound<'_, PyAny>) -> PyResult<Option<i128>> {
+pub(crate) fn int_value(obj: &Bound<'_, PyAny>) -> PyResult<Option<i128>> {
     match obj.extract::<i64>() {
         Ok(v) => Ok(Some(v.into())),
         Err(e) if obj.is_instance_of::<PyInt>() => {
@@ -57,4 +57,15 @@ pub(crate) fn count(obj: &Bound<'_, PyAny>, kind: Interface) -> PyResult<usize> 
     let v = int_value(obj)?;
     let shown = obj.str()?.to_string();
     limits::check_count(kind, v, &shown).map_err(publish)
+}
+
+/// A port number: 0 to 65535 (0 picks a free one), else `ValueError` saying so.
+pub(crate) fn port(obj: &Bound<'_, PyAny>) -> PyResult<u16> {
+    match int_value(obj)?.map(u16::try_from) {
+        Some(Ok(p)) => Ok(p),
+        _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "port must be between 0 and 65535 (0 picks a free one), got {}",
+            obj.str()?
+        ))),
+    }
 }

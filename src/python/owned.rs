@@ -19,6 +19,19 @@ use pyo3::PyResult;
 
 use super::errors::wrong_thread;
 
+thread_local! {
+    /// This thread's id, read once (`thread::current()` clones a handle on every call; the
+    /// check runs on every method call).
+    static THIS_THREAD: ThreadId = thread::current().id();
+}
+
+/// The calling thread's id (its own handle's while the thread is being torn down).
+fn this_thread() -> ThreadId {
+    THIS_THREAD
+        .try_with(|id| *id)
+        .unwrap_or_else(|_| thread::current().id())
+}
+
 /// A value that only the thread which created it can reach.
 pub(crate) struct Owned<T> {
     owner: ThreadId,
@@ -35,13 +48,13 @@ unsafe impl<T> Sync for Owned<T> {}
 impl<T> Owned<T> {
     pub(crate) fn new(value: T) -> Owned<T> {
         Owned {
-            owner: thread::current().id(),
+            owner: this_thread(),
             value: ManuallyDrop::new(value),
         }
     }
 
     fn is_mine(&self) -> bool {
-        thread::current().id() == self.owner
+        this_thread() == self.owner
     }
 
     /// The value, or `vrpn.WrongThreadError` naming `class` on any other thread.

@@ -120,8 +120,9 @@ impl Server {
     /// Listens on `port` (3883 by default; 0 picks a free one, see `port`), on every
     /// interface or only on the one with IPv4 address `nic`.
     #[new]
-    #[pyo3(signature = (port = 3883, nic = None))]
-    fn new(port: u16, nic: Option<&str>) -> PyResult<Self> {
+    #[pyo3(signature = (port = None, nic = None), text_signature = "(port=3883, nic=None)")]
+    fn new(port: Option<&Bound<'_, PyAny>>, nic: Option<&str>) -> PyResult<Self> {
+        let port = port.map_or(Ok(3883), super::args::port)?;
         let nic = match nic {
             None => None,
             Some(text) => Some(text.parse::<Ipv4Addr>().map_err(|e| {

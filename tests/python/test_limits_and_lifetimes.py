@@ -44,6 +44,9 @@ def test_every_count_has_the_config_files_bounds():
             make(server, "X", n)
     with pytest.raises(TypeError):
         vrpn.TrackerServer(server, "T2", 2.0)
+    for port in (-1, 65536, 2**70):
+        with pytest.raises(ValueError, match=f"port must be between 0 and 65535 .*got {port}"):
+            vrpn.Server(port)
 
 
 def test_names_clients_cannot_open_and_duplicates_are_refused():
