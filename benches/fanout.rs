@@ -14,7 +14,7 @@
 //! each case and reports medians (default 1). `cargo bench --bench fanout -- FILTER` keeps the
 //! cases whose label contains FILTER (e.g. `255`, `tcp`).
 
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::rc::Rc;
@@ -119,6 +119,9 @@ struct Figures {
     server_lines: usize,
 }
 
+/// One client: its remote, poses counted, when the first one came.
+type Client = (TrackerRemote, Rc<Cell<u64>>, Rc<Cell<Option<Instant>>>);
+
 fn run_case(program: &str, cfg: &std::path::Path, n: usize, tcp_only: bool, secs: f64) -> Figures {
     let server = start_server(program, cfg, true);
     let pid = server_pid(&server);
@@ -126,7 +129,7 @@ fn run_case(program: &str, cfg: &std::path::Path, n: usize, tcp_only: bool, secs
     let notices = Rc::new(Cell::new(0usize));
     let limits = Limits::default();
     let started = Instant::now();
-    let clients: Vec<(TrackerRemote, Rc<Cell<u64>>, Rc<Cell<Option<Instant>>>)> = (0..n)
+    let clients: Vec<Client> = (0..n)
         .map(|_| {
             let conn = Connection::client_in(&reactor, "127.0.0.1", server.port, tcp_only, limits)
                 .expect("client");

@@ -160,7 +160,7 @@ impl<'a> SendBatch<'a> {
         let mut sent = 0;
         while sent < self.len {
             let n = self.len - sent;
-            for k in 0..n {
+            for (k, slot) in msgs.iter_mut().enumerate().take(n) {
                 // SAFETY: msghdr is plain data (all-zero is valid: no name, no control);
                 // the pointers set point into `self.iov` / `self.names`, initialised up to
                 // `self.len`, which outlive the call; the bytes they point at are borrowed
@@ -170,7 +170,7 @@ impl<'a> SendBatch<'a> {
                 h.msg_hdr.msg_namelen = std::mem::size_of::<libc::sockaddr_in>() as _;
                 h.msg_hdr.msg_iov = self.iov[sent + k].as_mut_ptr();
                 h.msg_hdr.msg_iovlen = 1;
-                msgs[k].write(h);
+                slot.write(h);
             }
             // SAFETY: the first `n` headers are initialised (above) and valid for the call.
             let r = unsafe {
