@@ -35,12 +35,13 @@ use std::time::{Duration, Instant};
 use crate::error::Error;
 use crate::name::DeviceName;
 use crate::net::shell::Shell;
-use crate::net::{PassClock, Reactor};
+use crate::net::{PassBudget, PassClock, Reactor};
 use crate::proto::{Delivery, Session};
 use crate::time::{Now, TimeSource, TimeVal};
 use crate::wire;
 use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
+pub use crate::net::interrupt_pass;
 pub(crate) use liveness::Liveness;
 pub use open::ConnectionOptions;
 pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
@@ -93,6 +94,10 @@ struct Inner {
     /// Someone waits on the reactor's descriptor from outside ([`Connection::fd`]): every
     /// pass sets the reactor's timer for this connection's next deadline.
     watched: Cell<bool>,
+    /// `Limits::max_pass_time`.
+    pass_time: Duration,
+    /// The last pass ended with deliveries left for the next (its time was up).
+    left_over: Cell<bool>,
 }
 
 /// A VRPN connection handle. Clones share the connection.
@@ -145,6 +150,7 @@ fn new_reactor() -> Result<Reactor, Error> {
 
 impl Connection {
     fn from_parts(session: Session, shell: Shell) -> Connection {
+        let pass_time = session.limits().max_pass_time;
         Connection {
             inner: Rc::new(Inner {
                 reactor: shell.reactor().cloned(),
@@ -163,6 +169,8 @@ impl Connection {
                 liveness_started: Cell::new(false),
                 printed: RefCell::new(Vec::new()),
                 watched: Cell::new(false),
+                pass_time,
+                left_over: Cell::new(false),
             }),
         }
     }
@@ -585,8 +593,16 @@ impl Connection {
     // -------------------------------------------------------------- the loop
 
     /// Does all pending work without blocking: accepts and (re)connects peers, reads and
-    /// dispatches every message that arrived, runs the remotes' liveness pings, and writes
-    /// queued output. Reads the clock once.
+    /// dispatches the messages that arrived, runs the remotes' liveness pings, and writes
+    /// queued output.
+    ///
+    /// A pass is bounded, so it returns even while data arrives faster than callbacks handle
+    /// it: it takes at most [`Limits::max_messages_per_peer_per_loop`] messages from each
+    /// peer and stops delivering after [`Limits::max_pass_time`] (plus the callback running
+    /// then); what remains stays buffered for the next call, and
+    /// [`poll_timeout`](Self::poll_timeout) is then due at once, so a loop waiting in
+    /// [`wait`](Self::wait) does not sleep on it. A callback can end the pass early with
+    /// [`interrupt_pass`](crate::connection::interrupt_pass).
     ///
     /// One call serves every device on this connection (remotes sharing a connection need
     /// only one of them called). Called from inside a callback it returns at once (the outer
@@ -595,6 +611,7 @@ impl Connection {
         if self.inner.depth.get() > 0 {
             return Ok(());
         }
+        crate::net::clear_interrupt();
         if let Some(r) = &self.inner.reactor {
             r.poll_now().map_err(|e| Error::io("polling sockets", e))?;
         }
@@ -612,7 +629,8 @@ impl Connection {
             }
             session.begin_pass(clock);
         }
-        self.pump(clock);
+        let mut budget = PassBudget::new(Some(self.inner.pass_time));
+        let finished = self.pump(clock, &mut budget);
         self.run_liveness(clock);
         {
             let mut core = self.inner.core.borrow_mut();
@@ -621,9 +639,12 @@ impl Connection {
             session.flush_logs_some(LOG_FLUSH_PER_PASS);
         }
         // Deliveries queued by the flush (a peer that failed on write).
-        if self.inner.core.borrow().session.has_deliveries() {
-            self.pump(clock);
-        }
+        let finished = if finished && self.inner.core.borrow().session.has_deliveries() {
+            self.pump(clock, &mut budget)
+        } else {
+            finished
+        };
+        self.inner.left_over.set(!finished);
         if outer {
             clock.end();
         }
@@ -634,8 +655,9 @@ impl Connection {
     }
 
     /// Takes deliveries from the session and hands them to handlers, reading more from the
-    /// sockets whenever the session runs dry, until nothing more arrives.
-    fn pump(&self, clock: &dyn TimeSource) {
+    /// sockets whenever the session runs dry, until nothing more arrives (true) or `budget`
+    /// is spent (false: deliveries remain).
+    fn pump(&self, clock: &dyn TimeSource, budget: &mut PassBudget) -> bool {
         loop {
             // One borrow of the core per delivery: poll, carry out I/O requests, read more.
             let (d, scratch) = {
@@ -660,7 +682,7 @@ impl Connection {
                 (d, scratch)
             };
             match (d, scratch) {
-                (None, _) => break,
+                (None, _) => return true,
                 (
                     Some(Delivery::Message {
                         time,
@@ -685,6 +707,9 @@ impl Connection {
                         .borrow_mut()
                         .session
                         .restore_scratch(scratch);
+                    if !budget.spend() {
+                        return false;
+                    }
                 }
                 (Some(d), _) => self.dispatch_delivery(clock, d),
             }
@@ -771,6 +796,10 @@ impl Connection {
     /// time-out, a liveness ping), if ever. A loop that waits on several connections sleeps
     /// until the earliest of theirs.
     pub fn poll_timeout(&self) -> Option<Instant> {
+        if self.inner.left_over.get() || self.inner.core.borrow().session.input_left_over() {
+            // The last pass left messages buffered: the next is due now.
+            return Some(Instant::now());
+        }
         let session = self.inner.core.borrow().session.poll_timeout();
         let pings = self.liveness_deadline();
         match (session, pings) {
