@@ -82,7 +82,8 @@ impl ReplayControl<'_> {
     }
 
     /// Plays, now, every message up to `secs` after the first one (rewinding first when that
-    /// is behind the current position). From inside a callback: when the callback returns.
+    /// is behind the current position). Saturates: `f64::INFINITY` plays to the end; NaN does
+    /// nothing. From inside a callback: when the callback returns.
     pub fn play_to_time(&self, secs: f64) {
         self.conn.skip_user_messages(false);
         self.conn.with_replay(|r| r.play_to_time(secs));
@@ -102,7 +103,9 @@ impl ReplayControl<'_> {
     }
 
     /// Moves to `secs` after the first message without delivering the messages in between
-    /// (descriptions on the way are still learned). Returns whether that time is in the log.
+    /// (descriptions on the way are still learned). Returns whether that time is in the log:
+    /// a time past the end (`f64::INFINITY` included) moves to the end and returns false; NaN
+    /// returns false and moves nothing.
     pub fn jump_to_time(&self, secs: f64) -> bool {
         let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
         self.conn.skip_user_messages(true);
