@@ -148,8 +148,12 @@ fn a_file_controller_on_the_replay_connection() {
     let (conn, _t, xs) = replay(&path);
     let fc = FileController::new(&conn).unwrap();
     fc.play_to_time(TimeVal::new(0, 250_000)).unwrap();
+    // The message reaches the replay's handler, which plays what it asks for before the
+    // pass that delivers it returns.
+    conn.mainloop().unwrap();
     assert_eq!(xs.borrow().len(), 26);
     fc.set_replay_rate(0.0).unwrap();
+    conn.mainloop().unwrap();
     assert_eq!(conn.replay().unwrap().rate(), 0.0);
     fc.reset().unwrap();
     conn.mainloop().unwrap();

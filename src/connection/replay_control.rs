@@ -256,7 +256,8 @@ impl FileControllerIds {
 /// Controls a log replay by messages (C++ `vrpn_File_Controller`): on a replay connection it
 /// acts on the replay directly; on a client connection to a server that re-serves a replay
 /// (`vrpn_Relay Device@file:LOG`), it controls that replay over the network. A C++
-/// `vrpn_File_Controller` works the same way against such a server.
+/// `vrpn_File_Controller` works the same way against such a server. On a replay connection a
+/// control takes effect in the next `mainloop()` (which delivers the message to the replay).
 pub struct FileController {
     conn: Connection,
     ids: FileControllerIds,
