@@ -12,6 +12,7 @@ use crate::driver::Driver;
 
 pub mod cerealbox;
 pub mod controls;
+pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
@@ -65,6 +66,7 @@ pub static REGISTRY: &[&Driver] = &[
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,
+    &dtrack::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &joylin::DRIVER,
