@@ -32,6 +32,7 @@ pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod one_euro;
 pub mod pinchglove;
 pub mod spacemouse;
 pub mod uncjoystick;
@@ -65,6 +66,7 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    &one_euro::DRIVER,
     // Relays of other servers' devices.
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.

@@ -315,3 +315,36 @@ fn bad_configuration_lines_name_file_line_and_problem() {
         );
     }
 }
+
+/// The frames and C++ VRPN 07.38's poses for them, captured by hand (see the fixture's
+/// header): every pose must be the same to the last bit.
+#[test]
+fn same_poses_as_cxx_for_the_same_frames() {
+    let capture = include_str!("../../tests/fixtures/cxx_dtrack_one_euro.txt");
+    let mut want = capture.lines().filter_map(|l| l.strip_prefix("DTrack "));
+    let mut targets = Targets::default();
+    let mut reporter = Reporter::new(None, true, 0.0);
+    let mut compared = 0;
+    for frame in capture.lines().filter_map(|l| l.strip_prefix("FRAME ")) {
+        let text = frame.replace('|', "\r\n");
+        let h = parse(text.as_bytes(), &mut targets).unwrap();
+        let (sec, usec, _) = h.ts2;
+        // Received within 0.1 s of the controller's stamp: the report time is the stamp.
+        let arrived = TimeVal::new(sec as i64, usec as i64 + 2000);
+        let out = reporter.frame(&h, &targets, arrived);
+        for p in &out.poses {
+            let line = want.next().expect("as many poses as C++ sent");
+            let v: Vec<&str> = line.split_whitespace().collect();
+            let f = |i: usize| v[i].parse::<f64>().unwrap();
+            assert_eq!(
+                (out.time.sec, out.time.usec, p.sensor),
+                (f(0) as i64, f(1) as i64, f(2) as usize)
+            );
+            assert_eq!(p.pos, [f(3), f(4), f(5)], "{line}");
+            assert_eq!(p.quat, [f(6), f(7), f(8), f(9)], "{line}");
+            compared += 1;
+        }
+    }
+    assert!(want.next().is_none());
+    assert!(compared > 400, "{compared}");
+}
