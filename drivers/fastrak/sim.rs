@@ -182,6 +182,9 @@ pub struct FastrakSim {
     pub commands: Vec<String>,
     /// Every record sent (the last [`LOG_CAP`]).
     pub log: VecDeque<SentRecord>,
+    /// Device times sent instead of the clock's, one per record, in order (for tests of
+    /// IS-900 timestamps that are not times: ±∞, NaN, ±3.4·10³⁸).
+    pub hostile_times: VecDeque<f32>,
 }
 
 impl FastrakSim {
@@ -213,6 +216,7 @@ impl FastrakSim {
             reboots: 0,
             commands: Vec::new(),
             log: VecDeque::new(),
+            hostile_times: VecDeque::new(),
         }
     }
 
@@ -378,7 +382,14 @@ impl FastrakSim {
             let i = usize::from(station - 1);
             let seq = self.seq[i];
             self.seq[i] += 1;
-            let device_ms = self.device_ms(at);
+            let device_ms = match self.hostile_times.front() {
+                Some(_)
+                    if self.binary && self.lists[i].items[..self.lists[i].len].contains(&21) =>
+                {
+                    self.hostile_times.pop_front().unwrap_or_default()
+                }
+                _ => self.device_ms(at),
+            };
             rec.clear();
             rec.extend_from_slice(&[b'0', b'0' + station, self.cfg.status_byte]);
             let list = self.lists[i];

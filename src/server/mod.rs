@@ -7,5 +7,5 @@ pub mod options;
 pub mod run;
 
 pub use factory::{build_devices, BuildError, BuildNote};
-pub use options::{parse_args, ServerCommand, ServerOptions, SleepPolicy};
+pub use options::{parse_args, OptionError, ServerCommand, ServerOptions, SleepPolicy};
 pub use run::ServerLoop;
