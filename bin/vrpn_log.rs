@@ -1,11 +1,14 @@
 //! vrpn_log: inspects VRPN log files (`.vrpn`, as written by `vrpn_server -li/-lo` and
 //! `vrpn_log_devices`): a summary, a decoded dump (text or JSON lines), and CSV export of one
-//! device's reports. The work is done by `vrpn::log::tools`.
+//! device's reports, and plots of one device (`plot`, in `log/plot.rs`). The reading is done by
+//! `vrpn::log::tools`.
 
 #[path = "common/cli.rs"]
 mod cli;
 #[path = "common/output.rs"]
 mod output;
+#[path = "log/plot.rs"]
+mod plot;
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -21,6 +24,7 @@ const PROGRAM: &str = "vrpn_log";
 const USAGE: &str = "usage: vrpn_log summary FILE
        vrpn_log dump FILE [--json] [--device NAME] [--type NAME]
        vrpn_log csv FILE DEVICE [--kind KIND] [-o OUT]
+       vrpn_log plot FILE DEVICE [-o OUT.png|OUT.svg]
        vrpn_log --help | --version
 
   summary   cookie version, duration (highest - lowest user timestamp), first and last user
@@ -36,6 +40,11 @@ const USAGE: &str = "usage: vrpn_log summary FILE
     --kind KIND   pose (default), velocity, acceleration, button, analog or dial
     -o, --output OUT
                   write to OUT instead of standard output
+  plot      one device's reports as a picture: x, y, z against time and a top view per
+            sensor, analog channels, button timelines, dial turns, and the intervals
+            between reports with their histogram
+    -o, --output OUT
+                  OUT.png or OUT.svg (default DEVICE.png)
   -h, --help      print this help
   --version       print the version
 
@@ -302,10 +311,11 @@ fn csv(args: Args) -> Result<(), Fail> {
         .map_err(|e| Fail(format!("vrpn_log: {}: {e}", reader.path().display()), 1))?;
     let result = match args.output.as_deref() {
         Some(out_path) if out_path != "-" => {
-            let file = File::create(out_path).map_err(|e| io_fail(out_path, e))?;
+            let file = File::create(out_path)
+                .map_err(|e| io_fail(&format!("cannot create output file {out_path}"), e))?;
             let mut w = BufWriter::new(file);
             let r = tools::write_csv(&reader, &plan, &mut w).and_then(|r| w.flush().map(|_| r));
-            r.map_err(|e| io_fail(out_path, e))?
+            r.map_err(|e| io_fail(&format!("writing output file {out_path}"), e))?
         }
         _ => {
             let mut w = BufWriter::new(io::stdout().lock());
@@ -314,6 +324,41 @@ fn csv(args: Args) -> Result<(), Fail> {
         }
     };
     match result.1 {
+        Some(e) => Err(log_error(&e)),
+        None => Ok(()),
+    }
+}
+
+fn plot_command(args: Args) -> Result<(), Fail> {
+    args.only(&["--output"])?;
+    let path = args.file(1)?;
+    let device = args.positional[1].as_str();
+    let default_out = format!("{}.png", device.replace(['/', ' '], "_"));
+    let out = args.output.as_deref().unwrap_or(&default_out);
+    let format = plot::Format::of(out).ok_or_else(|| {
+        usage_error(format!(
+            "cannot tell the format of {out:?}: name it .png or .svg"
+        ))
+    })?;
+    let reader = open(path)?;
+    let r = plot::read(&reader, device);
+    if !r.found {
+        let e = format!(
+            "vrpn_log: no device {device:?} in {}; devices: {}",
+            reader.path().display(),
+            list(&r.devices)
+        );
+        return Err(Fail(e, 1));
+    }
+    if r.data.is_empty() {
+        let e = format!(
+            "vrpn_log: {device} sent no tracker, analog, button or dial reports in {}",
+            reader.path().display()
+        );
+        return Err(Fail(e, 1));
+    }
+    plot::render(&r.data, out, format).map_err(|e| Fail(format!("vrpn_log: {out}: {e}"), 1))?;
+    match r.damage {
         Some(e) => Err(log_error(&e)),
         None => Ok(()),
     }
@@ -338,6 +383,7 @@ fn run() -> Result<(), Fail> {
         "summary" => summary(args),
         "dump" => dump(args),
         "csv" => csv(args),
+        "plot" => plot_command(args),
         other => Err(usage_error(format!("unknown command {other:?}"))),
     }
 }

@@ -18,10 +18,14 @@ use output::{errln, outln};
 
 const PROGRAM: &str = "vrpn_ping";
 
+/// How long to wait for the connection, and then for each pong, before giving up.
+const GIVE_UP: Duration = Duration::from_secs(2);
+
 const USAGE: &str = "usage: vrpn_ping [-n COUNT] DEVICE@HOST[:PORT]
        vrpn_ping --help | --version
   Sends COUNT pings (default 1000) to DEVICE and prints the round-trip p50/p99/max in µs.
   The server answers pings only for devices it has, so DEVICE must exist there.
+  Gives up (exit status 1) when no server answers within 2 s, or a ping within 2 s.
   -n, --count COUNT  number of pings, at least 1 (default 1000)
   -h, --help         print this help
   --version          print the version";
@@ -117,14 +121,28 @@ fn run(name: &str, count: usize) -> Result<Vec<f64>, String> {
     conn.register_handler(pong, SenderFilter::Only(sender), move |_| {
         p.set(p.get() + 1)
     });
+    // The connection's notices (no server, not VRPN, …) explain a failure: keep the latest
+    // for the message instead of printing each as it comes.
+    let last_notice = Rc::new(std::cell::RefCell::new(None::<String>));
+    let ln = last_notice.clone();
+    let notices = conn.on_notice(move |n| *ln.borrow_mut() = Some(n.text.clone()));
     let start = Instant::now();
     while !conn.connected() {
-        if start.elapsed() > Duration::from_secs(10) {
-            return Err(format!("could not connect to {name} within 10 s"));
+        if start.elapsed() > GIVE_UP {
+            let why = last_notice
+                .borrow()
+                .as_deref()
+                .map(|t| format!(" ({})", t.trim_end_matches("; will keep retrying")))
+                .unwrap_or_default();
+            return Err(format!(
+                "no connection to {name} within {} s{why}; is a VRPN server running there?",
+                GIVE_UP.as_secs()
+            ));
         }
         conn.mainloop().map_err(|e| e.to_string())?;
         let _ = conn.wait(Duration::from_millis(5));
     }
+    conn.remove_handler(notices);
     let mut rtts = Vec::with_capacity(count);
     for i in 0..count {
         let before = pongs.get();
@@ -136,9 +154,10 @@ fn run(name: &str, count: usize) -> Result<Vec<f64>, String> {
             if pongs.get() > before {
                 break;
             }
-            if t0.elapsed() > Duration::from_secs(2) {
+            if t0.elapsed() > GIVE_UP {
                 return Err(format!(
-                    "ping {i} got no pong within 2 s: does {} exist on that server?",
+                    "ping {i} got no pong within {} s: does {} exist on that server?",
+                    GIVE_UP.as_secs(),
                     parsed.device
                 ));
             }

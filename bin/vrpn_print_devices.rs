@@ -17,9 +17,10 @@ use std::time::{Duration, Instant};
 
 use serde::ser::{SerializeMap, Serializer as _};
 use serde_json::ser::{CompactFormatter, Compound};
+use vrpn::connection::{set_text_printer, TextPrinter};
 use vrpn::{
-    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, TextReceiver,
-    TextSeverity, TimeVal, TrackerRemote,
+    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, NoticeKind,
+    TextReceiver, TextSeverity, TimeVal, TrackerRemote,
 };
 
 use output::{errln, outln};
@@ -41,6 +42,8 @@ const USAGE: &str =
   --log FILE         log every message received to FILE (C++ .vrpn format; one file per
                      server: FILE-2.vrpn, … for the second and later); replay it with
                      DEVICE@file:FILE
+  --until-eof        with DEVICE@file:FILE names only: exit once every file has been
+                     replayed to its end
   -rli FILE          ask each server to log what it receives from us to FILE, on its
                      machine (C++ remote logging; a server of this crate writes it inside
                      its -logdir folder, and only under a plain file name)
@@ -56,7 +59,11 @@ const USAGE: &str =
                      (each of these also takes two dashes: --notracker, --trackerstride N)
   --list HOST[:PORT] print the device names the server announces, then exit
   -h, --help         print this help
-  --version          print the version";
+  --version          print the version
+Reports (and the devices' text messages) go to stdout; notices, warnings and errors go to
+stderr, one line each, prefixed with the program name.
+Exit status: 0 when stopped (^C, --seconds, closed output, --until-eof), 1 when a server
+offers no device of a name given, 2 for a bad name or option.";
 
 /// The C++ options spelt with one dash.
 const CPP_OPTIONS: &[&str] = &[
@@ -109,6 +116,7 @@ struct PrintOptions {
     json: bool,
     seconds: Option<f64>,
     log: Option<String>,
+    until_eof: bool,
     remote_in: Option<String>,
     remote_out: Option<String>,
     names: Vec<(String, Shown)>,
@@ -131,6 +139,7 @@ fn parse_args() -> Result<Command, lexopt::Error> {
                 o.seconds = Some(s);
             }
             Long("log") => o.log = Some(parser.value()?.string()?),
+            Long("until-eof") => o.until_eof = true,
             Long("rli") => o.remote_in = Some(parser.value()?.string()?),
             Long("rlo") => o.remote_out = Some(parser.value()?.string()?),
             Long("list") => list = Some(parser.value()?.string()?),
@@ -156,9 +165,40 @@ fn parse_args() -> Result<Command, lexopt::Error> {
         Some(location) if o.names.is_empty() => Ok(Command::List(location)),
         Some(_) => Err("--list takes no device names".into()),
         None if o.names.is_empty() => Err("name at least one DEVICE@HOST".into()),
+        None if o.until_eof && !o.names.iter().all(|(n, _)| is_replay(n)) => {
+            Err("--until-eof needs DEVICE@file:FILE names (a live device has no end)".into())
+        }
         None => Ok(Command::Print(o)),
     }
 }
+
+/// True for a `DEVICE@file:PATH` name (a replay, which has an end).
+fn is_replay(name: &str) -> bool {
+    matches!(
+        DeviceName::parse(name).map(|n| n.location),
+        Ok(vrpn::Location::File { .. })
+    )
+}
+
+/// Output streams: data (reports, device texts) on stdout, diagnostics on stderr, once. The
+/// library's default printer would write device warnings to stderr beside the report line
+/// and notices in its own format; it is turned off and each connection's notices come here.
+fn report_notices(conn: &Connection, missing: Option<&Missing>) {
+    let missing = missing.cloned();
+    conn.on_notice(move |n| {
+        errln!("{PROGRAM}: {}", n.text);
+        // The server offers no device of a name given: nothing will ever come of it.
+        if let (NoticeKind::NoSuchDevice { device, .. }, Some(m)) = (&n.kind, &missing) {
+            let mut m = m.borrow_mut();
+            if !m.contains(device) {
+                m.push(device.clone());
+            }
+        }
+    });
+}
+
+/// The device names servers said they do not offer.
+type Missing = Rc<std::cell::RefCell<Vec<String>>>;
 
 /// The clock-synchronisation estimate of a device's connection as of the last loop pass:
 /// offset (server clock minus ours) and its uncertainty, in seconds; `None` while no sync is in
@@ -213,6 +253,7 @@ fn list(location: &str) -> u8 {
             return 2;
         }
     };
+    report_notices(&conn, None);
     let start = Instant::now();
     let mut connected_at = None;
     while start.elapsed() < Duration::from_secs(10) && !signals::stop_requested() {
@@ -258,10 +299,12 @@ fn main() -> ExitCode {
         }
         Ok(Command::List(location)) => {
             signals::install();
+            set_text_printer(TextPrinter::Off);
             list(&location)
         }
         Ok(Command::Print(options)) => {
             signals::install();
+            set_text_printer(TextPrinter::Off);
             print(&options)
         }
         Err(e) => {
@@ -334,6 +377,9 @@ impl Opened {
 fn print(o: &PrintOptions) -> u8 {
     let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
+    let mut watched: Vec<Connection> = Vec::new();
+    // The names a server says it does not offer: nothing will ever come of them.
+    let missing: Missing = Rc::default();
     for (name, shown) in &o.names {
         let (name, shown) = (name.as_str(), *shown);
         if let Err(e) = DeviceName::parse(name) {
@@ -347,6 +393,10 @@ fn print(o: &PrintOptions) -> u8 {
                 return 2;
             }
         };
+        if !watched.iter().any(|c| c.same_as(tracker.connection())) {
+            report_notices(tracker.connection(), Some(&missing));
+            watched.push(tracker.connection().clone());
+        }
         if o.remote_in.is_some() || o.remote_out.is_some() {
             let conn = tracker.connection();
             let asked = conn.request_remote_logging(
@@ -369,7 +419,7 @@ fn print(o: &PrintOptions) -> u8 {
                     },
                 };
                 if let Err(e) = conn.log_incoming(&file) {
-                    errln!("{PROGRAM}: --log {file}: {e}");
+                    errln!("{PROGRAM}: --log: {e}");
                     return 2;
                 }
                 logged.push(conn.clone());
@@ -416,12 +466,26 @@ fn print(o: &PrintOptions) -> u8 {
                 return 1;
             }
         }
+        // Every device named is missing: nothing will ever be printed.
+        if missing.borrow().len() == devices.len() {
+            break;
+        }
+        if o.until_eof && watched.iter().all(replay_done) {
+            break;
+        }
         // Sleep until data arrives (or 10 ms for ping timers and reconnect attempts).
         if let Some(d) = devices.first() {
             let _ = d.tracker.connection().wait(Duration::from_millis(10));
         }
     }
-    0
+    // A device a server does not offer is an error, whether or not others printed.
+    let any_missing = !missing.borrow().is_empty();
+    u8::from(any_missing)
+}
+
+/// True once a replay connection has played every message of its file.
+fn replay_done(conn: &Connection) -> bool {
+    conn.replay().is_some_and(|r| r.eof())
 }
 
 /// Every Nth report of each sensor (C++ `-trackerstride`: the Nth, 2Nth, … are printed).
@@ -698,9 +762,15 @@ fn open_others(
                     }
                 )
             );
-        } else if msg.severity == TextSeverity::Normal {
-            // Warnings and errors are printed by the default text printer.
-            outln!("{l}: Text message: {}", msg.text());
+        } else {
+            // Every severity here, on stdout with the reports (the default printer is off).
+            let what = match msg.severity {
+                TextSeverity::Normal => "Text message",
+                TextSeverity::Warning => "Warning",
+                TextSeverity::Error => "Error",
+                TextSeverity::Other(_) => "Text",
+            };
+            outln!("{l}: {what}: {}", msg.text());
         }
     });
     Ok(Opened {

@@ -65,13 +65,13 @@ fn main() -> ExitCode {
     // Logs open before the devices register, so their descriptions are logged (as C++).
     for (path, incoming) in [(&opts.log_in, true), (&opts.log_out, false)] {
         if let Some(path) = path {
-            let r = if incoming {
-                conn.log_incoming(path)
+            let (r, option) = if incoming {
+                (conn.log_incoming(path), "-li")
             } else {
-                conn.log_outgoing(path)
+                (conn.log_outgoing(path), "-lo")
             };
             if let Err(e) = r {
-                errln!("{PROGRAM}: {path}: {e}");
+                errln!("{PROGRAM}: {option}: {e}");
                 return ExitCode::from(1);
             }
         }
@@ -97,29 +97,47 @@ fn main() -> ExitCode {
         Some(status),
         |note| match note {
             BuildNote::Opened { entry, name } if verbose => {
-                outln!("Opening {}: {name} ({})", entry.keyword, entry.location);
+                errln!(
+                    "{PROGRAM}: opening {}: {name} ({})",
+                    entry.keyword,
+                    entry.location
+                );
             }
             BuildNote::Opened { .. } => {}
             BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
         },
     );
-    let devices = match devices {
+    let mut devices = match devices {
         Ok(d) => d,
         Err(e) => {
             errln!("{PROGRAM}: {e}");
             return ExitCode::from(1);
         }
     };
-    if verbose {
-        conn.on_notice(|n| {
-            outln!("vrpn: {}", n.text);
-        });
-    } else {
-        conn.on_notice(|n| {
-            if n.severity >= vrpn::Severity::Warning {
-                errln!("vrpn: {}", n.text)
+    // Remote-controlled forwarding, as C++ vrpn_server runs it (off until -forwardports).
+    let served = devices.len();
+    match vrpn::forward::ForwarderServer::new(&conn) {
+        Ok(forwarder) => {
+            forwarder.set_nic(opts.nic);
+            if let Some(ports) = &opts.forward_ports {
+                forwarder.allow_ports(ports.clone());
             }
-        });
+            devices.push(Box::new(forwarder));
+        }
+        Err(e) => errln!("{PROGRAM}: forwarding unavailable: {e}"),
+    }
+    // Diagnostics go to stderr, once each; standard output carries only the "serving" line
+    // (scripts read the port from it). See "Output streams" in the README.
+    conn.on_notice(move |n| {
+        if verbose || n.severity >= vrpn::Severity::Warning {
+            errln!("vrpn: {}", n.text)
+        }
+    });
+    if verbose {
+        if let Err(e) = show_texts(&conn) {
+            errln!("{PROGRAM}: {e}");
+            return ExitCode::from(1);
+        }
     }
     let port = conn.local_port().unwrap_or(opts.port);
     let nic = opts
@@ -127,8 +145,7 @@ fn main() -> ExitCode {
         .map_or("all interfaces".to_string(), |n| n.to_string());
     if !opts.quiet {
         outln!(
-            "{PROGRAM}: serving {} device(s) from {} on port {port} ({nic})",
-            devices.len(),
+            "{PROGRAM}: serving {served} device(s) from {} on port {port} ({nic})",
             opts.config
         );
     }
@@ -165,6 +182,32 @@ fn main() -> ExitCode {
         }
         None => ExitCode::SUCCESS,
     }
+}
+
+/// `-v`: prints every text message the devices send (and any a client sends) on stderr, one
+/// line each, as it is sent. The devices' texts go to the clients anyway; a server sees its
+/// own outgoing messages through the connection's local delivery.
+fn show_texts(conn: &Connection) -> Result<(), vrpn::Error> {
+    use vrpn::wire::payload::text::{TextMessage, TEXT_MESSAGE};
+    let text_type = conn.register_type(TEXT_MESSAGE)?;
+    conn.register_handler(text_type, vrpn::SenderFilter::Any, |m| {
+        let Ok(t) = TextMessage::decode(m.payload) else {
+            return;
+        };
+        let sender = m.connection().sender_name(m.sender).unwrap_or_default();
+        let severity = match TextSeverity::from_code(t.severity) {
+            TextSeverity::Normal => "message",
+            TextSeverity::Warning => "warning",
+            TextSeverity::Error => "error",
+            TextSeverity::Other(_) => "text",
+        };
+        errln!(
+            "{PROGRAM}: {severity} from {sender} (level {}): {}",
+            t.level,
+            String::from_utf8_lossy(t.text)
+        );
+    });
+    Ok(())
 }
 
 /// Reads the configuration file. Without `-warn` the first bad entry is fatal (`None`, after

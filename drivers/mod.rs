@@ -14,6 +14,7 @@ pub mod cerealbox;
 pub mod dyna;
 pub mod fastrak;
 pub mod flock;
+pub mod imager_stream_buffer;
 pub mod joylin;
 pub mod magellan;
 
@@ -30,6 +31,8 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    // Relays of other servers' devices.
+    &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,

@@ -23,6 +23,16 @@
 #define VRPN_ABI_VERSION 1
 
 /**
+ * Capacity a buffer needs for any VRPN name: 95 bytes and the NUL.
+ */
+#define VRPN_NAME_CAPACITY 96
+
+/**
+ * Capacity of `VrpnTextMessage::text`: the longest VRPN text (1023 bytes) and its NUL.
+ */
+#define VRPN_TEXT_CAPACITY 1024
+
+/**
  * Most channels an analog report carries (C++ `vrpn_CHANNEL_MAX`).
  */
 #define VRPN_ANALOG_MAX_CHANNELS 128
@@ -169,6 +179,11 @@ typedef struct VrpnButton VrpnButton;
 typedef struct VrpnButtonServer VrpnButtonServer;
 
 /**
+ * The connection of a location (C++ `vrpn_Connection` from `vrpn_get_connection_by_name`).
+ */
+typedef struct VrpnConnection VrpnConnection;
+
+/**
  * A dial remote (C++ `vrpn_Dial_Remote`).
  */
 typedef struct VrpnDial VrpnDial;
@@ -182,6 +197,11 @@ typedef struct VrpnDialServer VrpnDialServer;
  * A server connection (C++ `vrpn_Connection` made by `vrpn_create_server_connection`).
  */
 typedef struct VrpnServer VrpnServer;
+
+/**
+ * A text receiver (C++ `vrpn_Text_Receiver`).
+ */
+typedef struct VrpnText VrpnText;
 
 /**
  * A tracker remote (C++ `vrpn_Tracker_Remote`).
@@ -220,11 +240,11 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Position in metres.
+     * Position in metres, tracker frame.
      */
     double pos[3];
     /**
-     * Orientation quaternion (x, y, z, w).
+     * Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's.
      */
     double quat[4];
 } VrpnTrackerPose;
@@ -247,11 +267,12 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Linear velocity, metres per second.
+     * Linear velocity, metres per second, tracker frame.
      */
     double vel[3];
     /**
-     * Rotation over `vel_quat_dt` seconds (x, y, z, w).
+     * Rotation over `vel_quat_dt` seconds (x, y, z, w), expressed in the tracker's frame:
+     * the orientation `vel_quat_dt` later is `vel_quat * quat`.
      */
     double vel_quat[4];
     /**
@@ -278,7 +299,7 @@ typedef struct {
      */
     int32_t sensor;
     /**
-     * Linear acceleration, metres per second squared.
+     * Linear acceleration, metres per second squared, tracker frame.
      */
     double acc[3];
     /**
@@ -295,6 +316,12 @@ typedef struct {
  * Receives tracker accelerations; `acceleration` is valid during the call only.
  */
 typedef void (*VrpnTrackerAccelerationCallback)(void *userdata, const VrpnTrackerAcceleration *acceleration);
+
+/**
+ * Receives a sender name a peer described; `name` is NUL-terminated and valid during the
+ * call only.
+ */
+typedef void (*VrpnPeerSenderCallback)(void *userdata, const char *name);
 
 /**
  * One button changed.
@@ -364,6 +391,34 @@ typedef struct {
  * Receives dial updates; `update` is valid during the call only.
  */
 typedef void (*VrpnDialUpdateCallback)(void *userdata, const VrpnDialUpdate *update);
+
+/**
+ * A text message from a device.
+ */
+typedef struct {
+    /**
+     * Time the sender stamped on the message (translated to the local clock when clock
+     * synchronisation is in effect).
+     */
+    VrpnTimeVal time;
+    /**
+     * 0 normal, 1 warning, 2 error (C++ `vrpn_TEXT_NORMAL` …); other values as sent.
+     */
+    uint32_t severity;
+    /**
+     * The level the sender gave (free-form).
+     */
+    uint32_t level;
+    /**
+     * The text, UTF-8, NUL-terminated.
+     */
+    char text[VRPN_TEXT_CAPACITY];
+} VrpnTextMessage;
+
+/**
+ * Receives text messages; `message` is valid during the call only.
+ */
+typedef void (*VrpnTextMessageCallback)(void *userdata, const VrpnTextMessage *message);
 
 #ifdef __cplusplus
 extern "C" {
@@ -482,6 +537,111 @@ VrpnStatus vrpn_tracker_set_update_rate(VrpnTracker *tracker, double hz);
  * Asks the server to re-zero its origin (servers that cannot honour it ignore it).
  */
 VrpnStatus vrpn_tracker_reset_origin(VrpnTracker *tracker);
+
+/**
+ * Opens (or shares) the connection of the location in device name `name`
+ * ("Tracker0@host", "Tracker0@file:log.vrpn"): the one remotes opened with the same location
+ * use. NULL on failure; see `vrpn_last_error`.
+ */
+VrpnConnection *vrpn_connection_open(const char *name);
+
+/**
+ * Frees a connection handle (NULL is ignored); the connection closes once no remote uses it.
+ */
+VrpnStatus vrpn_connection_free(VrpnConnection *connection);
+
+/**
+ * Services the connection without blocking; runs the callbacks of every remote on it.
+ */
+VrpnStatus vrpn_connection_mainloop(VrpnConnection *connection);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_connection_state(const VrpnConnection *connection);
+
+/**
+ * Calls `callback(userdata, name)` with each sender (device) name the server describes, as
+ * it is described, inside `mainloop`.
+ */
+VrpnStatus vrpn_connection_on_peer_sender(VrpnConnection *connection, VrpnPeerSenderCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by the id `vrpn_connection_on_peer_sender` gave.
+ */
+VrpnStatus vrpn_connection_remove_callback(VrpnConnection *connection, uint64_t id);
+
+/**
+ * Number of sender (device) names the server has described so far, or a negative status.
+ */
+int32_t vrpn_connection_peer_sender_count(const VrpnConnection *connection);
+
+/**
+ * Copies sender name `index` (0 .. `vrpn_connection_peer_sender_count` - 1) into `name`, NUL
+ * terminated (`VRPN_NAME_CAPACITY` bytes always suffice); returns its length in bytes, or a
+ * negative status (`VRPN_STATUS_INVALID_ARGUMENT` for an index beyond the count or a buffer
+ * too small, which is left untouched).
+ */
+int32_t vrpn_connection_peer_sender(const VrpnConnection *connection, int32_t index, char *name, size_t capacity);
+
+/**
+ * 1 when `connection` replays a log file, 0 for a live one, or a negative status.
+ */
+int32_t vrpn_connection_is_replay(const VrpnConnection *connection);
+
+/**
+ * Sets the replay speed: 1.0 real time, 0 paused, 10 ten times faster, `INFINITY` as fast as
+ * possible.
+ */
+VrpnStatus vrpn_connection_replay_set_rate(VrpnConnection *connection, double rate);
+
+/**
+ * Writes the replay speed to `*rate`.
+ */
+VrpnStatus vrpn_connection_replay_rate(const VrpnConnection *connection, double *rate);
+
+/**
+ * Moves to `secs` after the first message without delivering the messages in between:
+ * `VRPN_STATUS_OK`, or `VRPN_STATUS_NO_DATA` when that time is beyond the log's end (the
+ * replay then stands at the end).
+ */
+VrpnStatus vrpn_connection_replay_seek(VrpnConnection *connection, double secs);
+
+/**
+ * Delivers, now, every message up to `secs` after the first one (callbacks run inside).
+ */
+VrpnStatus vrpn_connection_replay_play_to(VrpnConnection *connection, double secs);
+
+/**
+ * Delivers the next message now: `VRPN_STATUS_OK`, or `VRPN_STATUS_NO_DATA` at the end.
+ */
+VrpnStatus vrpn_connection_replay_play_one(VrpnConnection *connection);
+
+/**
+ * Back to the start of the log.
+ */
+VrpnStatus vrpn_connection_replay_reset(VrpnConnection *connection);
+
+/**
+ * 1 once every message has been played, 0 before, or a negative status.
+ */
+int32_t vrpn_connection_replay_eof(const VrpnConnection *connection);
+
+/**
+ * Writes where the replay stands, in seconds since the first message, to `*secs`.
+ */
+VrpnStatus vrpn_connection_replay_position(const VrpnConnection *connection, double *secs);
+
+/**
+ * Writes the seconds between the log's first and last message to `*secs`.
+ */
+VrpnStatus vrpn_connection_replay_length(const VrpnConnection *connection, double *secs);
+
+/**
+ * Writes the time of the log's first message to `*time`: `VRPN_STATUS_OK`, or
+ * `VRPN_STATUS_NO_DATA` (nothing written) for a log without messages.
+ */
+VrpnStatus vrpn_connection_replay_start_time(const VrpnConnection *connection, VrpnTimeVal *time);
 
 /**
  * Opens the button device `name` (see `vrpn_tracker_open`); NULL on failure.
@@ -636,6 +796,13 @@ VrpnStatus vrpn_server_mainloop(VrpnServer *server);
 VrpnStatus vrpn_server_wait(VrpnServer *server, uint32_t timeout_ms);
 
 /**
+ * The server's descriptor for the program's own `poll`/`select`/`epoll` loop (see
+ * `vrpn_tracker_fd`): readable when a client sends something or the server has timed work
+ * due. Never read it or close it. A negative status on failure.
+ */
+int32_t vrpn_server_fd(const VrpnServer *server);
+
+/**
  * The port the server listens on, or a negative status.
  */
 int32_t vrpn_server_port(const VrpnServer *server);
@@ -652,7 +819,9 @@ int32_t vrpn_server_connected_clients(const VrpnServer *server);
 int32_t vrpn_server_connection_state(const VrpnServer *server);
 
 /**
- * Serves tracker `name` with `sensors` sensors (1..=1024) on `server`; NULL on failure.
+ * Serves tracker `name` with `sensors` sensors (1..=1024, as in `vrpn.cfg`) on `server`;
+ * NULL on failure: a count out of range or a name already serving a tracker on this server
+ * (`VRPN_STATUS_INVALID_ARGUMENT`), a name with `@` or empty (`VRPN_STATUS_NAME`).
  */
 VrpnTrackerServer *vrpn_tracker_server_new(VrpnServer *server, const char *name, int32_t sensors);
 
@@ -668,13 +837,15 @@ VrpnStatus vrpn_tracker_server_free(VrpnTrackerServer *tracker);
 VrpnStatus vrpn_tracker_server_report_pose(VrpnTrackerServer *tracker, int32_t sensor, const VrpnTimeVal *time, const double *pos, const double *quat);
 
 /**
- * Reports a velocity of `sensor`: `vel` 3 doubles (m/s), `vel_quat` 4 (the rotation over
- * `dt` seconds, x, y, z, w); `time` NULL for now.
+ * Reports a velocity of `sensor`: `vel` 3 doubles (m/s, tracker frame), `vel_quat` 4 (the
+ * rotation over `dt` seconds in the tracker's frame, x, y, z, w: the orientation `dt` later
+ * is `vel_quat * quat`); `time` NULL for now.
  */
 VrpnStatus vrpn_tracker_server_report_velocity(VrpnTrackerServer *tracker, int32_t sensor, const VrpnTimeVal *time, const double *vel, const double *vel_quat, double dt);
 
 /**
- * Serves button device `name` with `buttons` buttons (1..=256) on `server`; NULL on failure.
+ * Serves button device `name` with `buttons` buttons (1..=256) on `server`; NULL on failure
+ * (see `vrpn_tracker_server_new`).
  */
 VrpnButtonServer *vrpn_button_server_new(VrpnServer *server, const char *name, int32_t buttons);
 
@@ -696,7 +867,7 @@ VrpnStatus vrpn_button_server_report_changes(VrpnButtonServer *button, const Vrp
 
 /**
  * Serves analog device `name` with `channels` channels (1..=128) on `server`; NULL on
- * failure.
+ * failure (see `vrpn_tracker_server_new`).
  */
 VrpnAnalogServer *vrpn_analog_server_new(VrpnServer *server, const char *name, int32_t channels);
 
@@ -722,7 +893,8 @@ VrpnStatus vrpn_analog_server_report(VrpnAnalogServer *analog, const VrpnTimeVal
 VrpnStatus vrpn_analog_server_report_changes(VrpnAnalogServer *analog, const VrpnTimeVal *time);
 
 /**
- * Serves dial device `name` with `dials` dials (1..=128) on `server`; NULL on failure.
+ * Serves dial device `name` with `dials` dials (1..=128) on `server`; NULL on failure (see
+ * `vrpn_tracker_server_new`).
  */
 VrpnDialServer *vrpn_dial_server_new(VrpnServer *server, const char *name, int32_t dials);
 
@@ -741,6 +913,90 @@ VrpnStatus vrpn_dial_server_add(VrpnDialServer *dial, int32_t index, double revo
  * now), and starts summing anew.
  */
 VrpnStatus vrpn_dial_server_report_changes(VrpnDialServer *dial, const VrpnTimeVal *time);
+
+/**
+ * Receives the text messages of device `name` ("Tracker0@host", see `vrpn_tracker_open`);
+ * NULL on failure. (Without a callback, warnings and errors still go to the default printer:
+ * see `vrpn_set_default_printer`.)
+ */
+VrpnText *vrpn_text_open(const char *name);
+
+/**
+ * Frees a text receiver (NULL is ignored).
+ */
+VrpnStatus vrpn_text_free(VrpnText *text);
+
+/**
+ * Services the receiver's connection without blocking; runs callbacks.
+ */
+VrpnStatus vrpn_text_mainloop(VrpnText *text);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_text_connection_state(const VrpnText *text);
+
+/**
+ * Calls `callback(userdata, message)` for every text message from the device.
+ */
+VrpnStatus vrpn_text_on_message(VrpnText *text, VrpnTextMessageCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by the id `vrpn_text_on_message` gave.
+ */
+VrpnStatus vrpn_text_remove_callback(VrpnText *text, uint64_t id);
+
+/**
+ * Number of messages received so far (saturated at INT32_MAX), or a negative status.
+ */
+int32_t vrpn_text_received(const VrpnText *text);
+
+/**
+ * Blocks (without spinning: in the reactor's poll) until data arrives for the tracker's
+ * connection, the connection has timed work due (a reconnection attempt, a liveness ping),
+ * or `timeout_ms` pass. Returns `VRPN_STATUS_OK` when data arrived, `VRPN_STATUS_NO_DATA`
+ * otherwise; call `vrpn_tracker_mainloop` next.
+ */
+VrpnStatus vrpn_tracker_wait(VrpnTracker *tracker, uint32_t timeout_ms);
+
+/**
+ * The descriptor to wait on for reading in the program's own `poll`/`select`/`epoll` loop:
+ * readable when data arrives or the connection's next timed work is due (each mainloop sets
+ * a timer in it). Call `vrpn_tracker_mainloop` when it is readable. The descriptor belongs
+ * to the library: never read it or close it. A negative status on failure
+ * (`VRPN_STATUS_UNSUPPORTED` for a replay, which has no sockets).
+ */
+int32_t vrpn_tracker_fd(const VrpnTracker *tracker);
+
+/**
+ * `vrpn_tracker_wait` for a button remote.
+ */
+VrpnStatus vrpn_button_wait(VrpnButton *button, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for a button remote.
+ */
+int32_t vrpn_button_fd(const VrpnButton *button);
+
+/**
+ * `vrpn_tracker_wait` for an analog remote.
+ */
+VrpnStatus vrpn_analog_wait(VrpnAnalog *analog, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for an analog remote.
+ */
+int32_t vrpn_analog_fd(const VrpnAnalog *analog);
+
+/**
+ * `vrpn_tracker_wait` for a dial remote.
+ */
+VrpnStatus vrpn_dial_wait(VrpnDial *dial, uint32_t timeout_ms);
+
+/**
+ * `vrpn_tracker_fd` for a dial remote.
+ */
+int32_t vrpn_dial_fd(const VrpnDial *dial);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -60,7 +60,9 @@ impl Error {
     /// A log error as the variant a user matches: not found, damaged, or other.
     pub(crate) fn from_log(e: LogError) -> Error {
         match e {
-            LogError::Io { path, error, .. } if error.kind() == io::ErrorKind::NotFound => {
+            LogError::Open { path, error } | LogError::Io { path, error, .. }
+                if error.kind() == io::ErrorKind::NotFound =>
+            {
                 Error::LogNotFound { path }
             }
             e @ (LogError::BadCookie { .. } | LogError::BadEntry { .. }) => Error::LogDamaged(e),
@@ -94,7 +96,7 @@ impl std::fmt::Display for Error {
             ),
             Error::Log(text) => f.write_str(text),
             Error::LogNotFound { path } => {
-                write!(f, "{}: no such log file", path.display())
+                write!(f, "cannot read log file {}: no such file", path.display())
             }
             Error::LogDamaged(e) => e.fmt(f),
             Error::NotConnected(state) => write!(

@@ -55,6 +55,8 @@
 //! - [`connection`]: the public [`Connection`]: names, handlers, `mainloop()`.
 //! - [`devices`], [`layered`], [`serial`], [`drivers`]: tracker and the other device types,
 //!   the layered trackers, the serial layer and the hardware drivers.
+//! - [`forward`]: forwarders between connections, remote-controlled forwarding and the relay
+//!   that re-serves devices of servers clients cannot reach.
 //! - [`server`]: `vrpn.cfg` and the `vrpn_server` loop.
 //!
 //! # Printing
@@ -79,6 +81,7 @@ pub mod driver;
 #[path = "../drivers/mod.rs"]
 pub mod drivers;
 mod error;
+pub mod forward;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod layered;
@@ -100,8 +103,8 @@ pub mod time;
 pub mod wire;
 
 pub use connection::{
-    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, Limits, Notice, ServiceClass,
-    Severity,
+    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, DropReason, Limits, NameKind,
+    Notice, NoticeKind, ServiceClass, Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
 pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};
@@ -120,7 +123,7 @@ pub use dispatch::{HandlerId, Message, SenderFilter, SenderId, TypeId};
 pub use error::Error;
 pub use layered::{TrackerAnalogFly, TrackerButtonFly};
 pub use name::{DeviceName, Location};
-pub use net::Reactor;
+pub use net::{Reactor, Waiter, Wake};
 pub use time::{Now, TimeVal};
 
 /// The linear-algebra crate of the reports' types (`Vector3`, `UnitQuaternion`), re-exported
@@ -139,3 +142,27 @@ struct UsingDoctests;
 #[cfg(doctest)]
 #[doc = include_str!("../docs/IMAGER.md")]
 struct ImagerDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/LOGGING_REQUESTS.md")]
+struct LoggingRequestsDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/MUTEX.md")]
+struct MutexDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SHARED_OBJECTS.md")]
+struct SharedObjectDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/FUNCTION_GENERATOR.md")]
+struct FunctionGeneratorDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/SOUND.md")]
+struct SoundDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/REDUNDANT_TRANSMISSION.md")]
+struct RedundantDoctests;

@@ -227,6 +227,66 @@ fn c_api_checks() {
     assert!(out.contains("checks passed"), "{out}");
 }
 
+/// `vrpn_tracker_wait` and a `poll()` on `vrpn_tracker_fd` read a 60 Hz two-sensor tracker
+/// with about one wake-up per datagram (both sensors' poses), not one per millisecond.
+#[test]
+fn c_wait_and_fd_do_not_spin() {
+    let scratch = Scratch::new("wait");
+    let exe = scratch.0.join("wait_checks");
+    compile("tests/c/wait_checks.c", &exe, Link::Shared);
+    let server = common::start_server("vrpn_Tracker_NULL Tracker0 2 60.0\n", 0);
+    let name = format!("Tracker0@127.0.0.1:{}", server.port);
+    let out = run(&exe, &[&name, "2"]);
+    assert!(out.contains("wait checks passed"), "{out}");
+    for way in ["wait", "fd"] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{way} ")))
+            .unwrap_or_else(|| panic!("no {way} line in {out}"));
+        let field = |k: &str| -> u64 {
+            line.split_whitespace()
+                .find_map(|w| w.strip_prefix(k))
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| panic!("no {k} in {line}"))
+        };
+        let (poses, wakeups) = (field("poses="), field("wakeups="));
+        assert!(poses >= 120, "{way}: {poses} poses in 2 s: {out}");
+        assert!(
+            wakeups <= 2 * poses,
+            "{way}: {wakeups} wake-ups for {poses} poses"
+        );
+    }
+}
+
+#[test]
+fn c_discovery_texts_and_replay() {
+    let scratch = Scratch::new("discovery");
+    let exe = scratch.0.join("discovery_replay");
+    compile("tests/c/discovery_replay.c", &exe, Link::Shared);
+    let server = common::start_server(
+        "vrpn_Tracker_NULL Tracker0 1 10.0\nvrpn_Text_Example Text0 0.05 hello from the server\n",
+        0,
+    );
+    // A log of Tracker0: 20 poses 25 ms apart, x = 0 .. 19 (what the C program expects).
+    let log = scratch.0.join("tracker.vrpn");
+    {
+        let conn = vrpn::Connection::server(Some([127, 0, 0, 1].into()), 0).unwrap();
+        conn.log_outgoing(log.to_str().unwrap()).unwrap();
+        let tracker = vrpn::TrackerServer::new("Tracker0", &conn, 1).unwrap();
+        let t0 = conn.now().wall;
+        for i in 0..20u32 {
+            let t = t0.plus(std::time::Duration::from_millis(25 * u64::from(i)));
+            tracker
+                .report_pose(0usize, t, [f64::from(i), 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+                .unwrap();
+        }
+        conn.close_logs().unwrap();
+    }
+    let at = format!("127.0.0.1:{}", server.port);
+    let out = run(&exe, &[&at, log.to_str().unwrap()]);
+    assert!(out.contains("checks passed"), "{out}");
+}
+
 #[test]
 fn c_tracker_client_reads_vrpn_server() {
     let scratch = Scratch::new("client");

@@ -653,9 +653,9 @@ fn corrupt_length_bad_cookie_and_missing_file() {
 
     let (code, _, err) = run(&["summary", "/nonexistent/x.vrpn"]);
     assert_eq!(code, 1);
-    assert!(
-        err.starts_with("vrpn_log: /nonexistent/x.vrpn: byte 0:"),
-        "{err}"
+    assert_eq!(
+        err.trim_end(),
+        "vrpn_log: cannot read log file /nonexistent/x.vrpn: no such file"
     );
 
     let empty = scratch("empty.vrpn");

@@ -30,6 +30,11 @@ impl Callbacks {
         Ok(VrpnStatus::Ok)
     }
 
+    /// Forgets every callback and returns the handlers still registered.
+    pub(crate) fn take_all(&self) -> Vec<HandlerId> {
+        self.0.borrow_mut().drain(..).flatten().collect()
+    }
+
     /// Forgets C id `id` and returns the handler to remove.
     pub(crate) fn take(&self, id: u64) -> Result<HandlerId, Failure> {
         let mut v = self.0.borrow_mut();
@@ -92,6 +97,18 @@ pub(crate) fn connection_state<T: Remote>(r: *const T) -> i32 {
 /// Sensor index from C.
 pub(crate) fn index(i: i32, what: &str) -> Result<usize, Failure> {
     usize::try_from(i).map_err(|_| Failure::invalid(format!("{what} {i} is negative")))
+}
+
+/// Refuses a NULL output pointer. Every polling call checks its arguments first, so a call
+/// with a NULL output fails the same way before and after data arrived.
+pub(crate) fn out_arg<T>(out: *mut T, what: &str) -> Result<(), Failure> {
+    if out.is_null() {
+        return Err(Failure::new(
+            VrpnStatus::NullArgument,
+            format!("{what} is NULL"),
+        ));
+    }
+    Ok(())
 }
 
 /// A tracker remote (C++ `vrpn_Tracker_Remote`).
@@ -220,8 +237,10 @@ pub extern "C" fn vrpn_tracker_pose(
     pose: *mut VrpnTrackerPose,
 ) -> VrpnStatus {
     status(handle::with(tracker, |t| {
-        match t.remote.pose(index(sensor, "sensor")?) {
-            // SAFETY: `pose` is a writable VrpnTrackerPose or NULL (checked).
+        let sensor = index(sensor, "sensor")?;
+        out_arg(pose, "pose")?;
+        match t.remote.pose(sensor) {
+            // SAFETY: `pose` is a writable VrpnTrackerPose (checked non-NULL above).
             Some(p) => unsafe { write_out(pose, VrpnTrackerPose::from(&p), "pose")? },
             None => return Ok(VrpnStatus::NoData),
         }
@@ -237,7 +256,9 @@ pub extern "C" fn vrpn_tracker_velocity(
     velocity: *mut VrpnTrackerVelocity,
 ) -> VrpnStatus {
     status(handle::with(tracker, |t| {
-        match t.remote.velocity(index(sensor, "sensor")?) {
+        let sensor = index(sensor, "sensor")?;
+        out_arg(velocity, "velocity")?;
+        match t.remote.velocity(sensor) {
             // SAFETY: `velocity` is writable or NULL (checked).
             Some(v) => unsafe { write_out(velocity, VrpnTrackerVelocity::from(&v), "velocity")? },
             None => return Ok(VrpnStatus::NoData),
@@ -254,7 +275,9 @@ pub extern "C" fn vrpn_tracker_acceleration(
     acceleration: *mut VrpnTrackerAcceleration,
 ) -> VrpnStatus {
     status(handle::with(tracker, |t| {
-        match t.remote.acceleration(index(sensor, "sensor")?) {
+        let sensor = index(sensor, "sensor")?;
+        out_arg(acceleration, "acceleration")?;
+        match t.remote.acceleration(sensor) {
             // SAFETY: `acceleration` is writable or NULL (checked).
             Some(a) => unsafe {
                 write_out(

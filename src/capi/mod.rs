@@ -31,10 +31,13 @@
 #![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 pub mod client;
+pub mod connection;
 mod handle;
 pub mod remotes;
 pub mod server;
+pub mod text;
 pub mod types;
+pub mod waiting;
 
 use std::cell::RefCell;
 use std::ffi::{c_char, CStr, CString};

@@ -4,7 +4,9 @@ use std::cell::RefCell;
 use std::ffi::{c_char, c_void};
 use std::rc::Rc;
 
-use super::client::{callback, connection_state, index, mainloop, open, Callbacks, Remote};
+use super::client::{
+    callback, connection_state, index, mainloop, open, out_arg, Callbacks, Remote,
+};
 use super::handle::{self, write_out, Header, Object};
 use super::types::{
     VrpnAnalogReport, VrpnAnalogReportCallback, VrpnButtonChange, VrpnButtonChangeCallback,
@@ -19,22 +21,30 @@ use crate::{AnalogRemote, ButtonRemote, DialRemote};
 /// # Safety
 /// `dst` is NULL or points to `capacity` writable elements.
 unsafe fn copy_out<T: Copy>(src: &[T], dst: *mut T, capacity: i32) -> Result<usize, Failure> {
-    let cap = usize::try_from(capacity)
-        .map_err(|_| Failure::invalid(format!("capacity {capacity} is negative")))?;
+    let cap = array_arg(dst, capacity)?;
     let n = src.len().min(cap);
     if n == 0 {
         return Ok(0);
-    }
-    if dst.is_null() {
-        return Err(Failure::new(
-            VrpnStatus::NullArgument,
-            "output array is NULL",
-        ));
     }
     // SAFETY: `dst` has room for `capacity >= n` elements (caller's contract) and cannot
     // overlap `src`, which is this library's own memory.
     unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), dst, n) };
     Ok(n)
+}
+
+/// Checks an output array and its capacity before anything is read: a NULL array with a
+/// nonzero capacity is refused whatever there is to copy (NULL with capacity 0 asks for
+/// nothing and is fine). Returns the capacity.
+fn array_arg<T>(dst: *mut T, capacity: i32) -> Result<usize, Failure> {
+    let cap = usize::try_from(capacity)
+        .map_err(|_| Failure::invalid(format!("capacity {capacity} is negative")))?;
+    if dst.is_null() && cap > 0 {
+        return Err(Failure::new(
+            VrpnStatus::NullArgument,
+            format!("output array is NULL with a capacity of {cap}"),
+        ));
+    }
+    Ok(cap)
 }
 
 // ------------------------------------------------------------------------------ button
@@ -257,6 +267,7 @@ pub extern "C" fn vrpn_analog_latest(
     report: *mut VrpnAnalogReport,
 ) -> VrpnStatus {
     status(handle::with(analog, |a| {
+        out_arg(report, "report")?;
         if !a.remote.got_report() {
             return Ok(VrpnStatus::NoData);
         }
@@ -276,6 +287,7 @@ pub extern "C" fn vrpn_analog_channels(
     capacity: i32,
 ) -> i32 {
     count(handle::with(analog, |a| {
+        array_arg(values, capacity)?;
         if !a.remote.got_report() {
             return Ok(0);
         }
@@ -397,12 +409,13 @@ pub extern "C" fn vrpn_dial_rotation(
 ) -> VrpnStatus {
     status(handle::with(dial, |d| {
         let i = self::index(index, "dial")?;
-        let t = d.totals.borrow();
         if i >= VRPN_DIAL_MAX_DIALS {
             return Err(Failure::invalid(format!(
                 "dial {i} is beyond the {VRPN_DIAL_MAX_DIALS} a device can have"
             )));
         }
+        out_arg(revolutions, "revolutions")?;
+        let t = d.totals.borrow();
         if !t.seen[i] {
             return Ok(VrpnStatus::NoData);
         }

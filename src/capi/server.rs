@@ -12,6 +12,7 @@ use super::types::VrpnTimeVal;
 use super::{count, status, text_arg, Failure, VrpnConnectionState, VrpnStatus};
 use crate::devices::analog::AnalogServer;
 use crate::devices::dial::DialServer;
+use crate::server::limits::{self, Claim, Interface, PublishError, Published};
 use crate::time::TimeVal;
 use crate::{ButtonServer, Connection, TrackerServer};
 
@@ -19,6 +20,8 @@ use crate::{ButtonServer, Connection, TrackerServer};
 pub struct VrpnServer {
     header: Header,
     conn: Connection,
+    /// The device names published on it (one device per interface and name).
+    published: Published,
 }
 
 impl Object for VrpnServer {
@@ -47,6 +50,7 @@ pub extern "C" fn vrpn_server_open(port: u16, nic: *const c_char) -> *mut VrpnSe
         Ok(VrpnServer {
             header: Header::new::<VrpnServer>(),
             conn: Connection::server(nic, port)?,
+            published: Published::default(),
         })
     })
 }
@@ -78,6 +82,17 @@ pub extern "C" fn vrpn_server_wait(server: *mut VrpnServer, timeout_ms: u32) -> 
     }))
 }
 
+/// The server's descriptor for the program's own `poll`/`select`/`epoll` loop (see
+/// `vrpn_tracker_fd`): readable when a client sends something or the server has timed work
+/// due. Never read it or close it. A negative status on failure.
+#[no_mangle]
+pub extern "C" fn vrpn_server_fd(server: *const VrpnServer) -> i32 {
+    match handle::with(server, |s| super::waiting::fd_of(&s.conn)) {
+        Ok(fd) => fd,
+        Err(f) => super::record(f) as i32,
+    }
+}
+
 /// The port the server listens on, or a negative status.
 #[no_mangle]
 pub extern "C" fn vrpn_server_port(server: *const VrpnServer) -> i32 {
@@ -102,42 +117,60 @@ pub extern "C" fn vrpn_server_connection_state(server: *const VrpnServer) -> i32
     }
 }
 
-/// Makes a device server of kind `T` on `server`'s connection.
+/// Makes a device server of interface `kind` with `count` elements on `server`'s connection,
+/// after the checks every binding applies ([`crate::server::limits`]): the count within the
+/// bounds `vrpn.cfg` has, a name clients can open, no other device of the interface under it.
 fn device<T: Object>(
     server: *mut VrpnServer,
     name: *const c_char,
-    make: impl FnOnce(&Connection, &str) -> Result<T, Failure>,
+    kind: Interface,
+    count: i32,
+    make: impl FnOnce(&Connection, &str, usize, Claim) -> Result<T, Failure>,
 ) -> *mut T {
     handle::into_handle(|| {
         handle::with(server, |s| {
             // SAFETY: C passes a NUL-terminated device name (checked for NULL).
             let name = unsafe { text_arg(name, "device name")? };
-            make(&s.conn, name)
+            let n = if kind == Interface::Text {
+                0
+            } else {
+                limits::check_count(kind, Some(count.into()), &count.to_string())
+                    .map_err(publish_failure)?
+            };
+            let claim = s.published.claim(kind, name).map_err(publish_failure)?;
+            make(&s.conn, name, n, claim)
         })
     })
 }
 
-/// A count argument from C, 1..=max.
-fn size(n: i32, what: &str, max: usize) -> Result<usize, Failure> {
-    match usize::try_from(n) {
-        Ok(n) if (1..=max).contains(&n) => Ok(n),
-        _ => Err(Failure::invalid(format!(
-            "{what} count {n} is not between 1 and {max}"
-        ))),
-    }
+/// A refused device server as a C status: a bad name is `VRPN_STATUS_NAME`, a bad count or
+/// a name already taken `VRPN_STATUS_INVALID_ARGUMENT`.
+fn publish_failure(e: PublishError) -> Failure {
+    let status = match e {
+        PublishError::Name(_) => VrpnStatus::Name,
+        PublishError::Count(_) | PublishError::Duplicate(_) => VrpnStatus::InvalidArgument,
+    };
+    Failure::new(status, e.to_string())
 }
 
-/// A time argument from C: NULL means now.
+/// A time argument from C: NULL means now; otherwise microseconds must be 0..=999999 (a
+/// `struct timeval` in its normal form), as C++ VRPN and every reader of the stamp expect.
 ///
 /// # Safety
 /// `time` is NULL or points to a readable `VrpnTimeVal`.
-unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> TimeVal {
+unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> Result<TimeVal, Failure> {
     if time.is_null() {
-        conn.now().wall
-    } else {
-        // SAFETY: non-null and readable (caller's contract).
-        TimeVal::from(unsafe { time.read() })
+        return Ok(conn.now().wall);
     }
+    // SAFETY: non-null and readable (caller's contract).
+    let t = unsafe { time.read() };
+    if !(0..1_000_000).contains(&t.usec) {
+        return Err(Failure::invalid(format!(
+            "time {{sec {}, usec {}}}: usec must be between 0 and 999999",
+            t.sec, t.usec
+        )));
+    }
+    Ok(TimeVal::from(t))
 }
 
 /// Reads `N` doubles from C.
@@ -161,6 +194,7 @@ unsafe fn doubles<const N: usize>(p: *const f64, what: &str) -> Result<[f64; N],
 pub struct VrpnTrackerServer {
     header: Header,
     server: TrackerServer,
+    _name: Claim,
 }
 
 impl Object for VrpnTrackerServer {
@@ -171,19 +205,28 @@ impl Object for VrpnTrackerServer {
     }
 }
 
-/// Serves tracker `name` with `sensors` sensors (1..=1024) on `server`; NULL on failure.
+/// Serves tracker `name` with `sensors` sensors (1..=1024, as in `vrpn.cfg`) on `server`;
+/// NULL on failure: a count out of range or a name already serving a tracker on this server
+/// (`VRPN_STATUS_INVALID_ARGUMENT`), a name with `@` or empty (`VRPN_STATUS_NAME`).
 #[no_mangle]
 pub extern "C" fn vrpn_tracker_server_new(
     server: *mut VrpnServer,
     name: *const c_char,
     sensors: i32,
 ) -> *mut VrpnTrackerServer {
-    device(server, name, |conn, name| {
-        Ok(VrpnTrackerServer {
-            header: Header::new::<VrpnTrackerServer>(),
-            server: TrackerServer::new(name, conn, size(sensors, "sensor", 1024)?)?,
-        })
-    })
+    device(
+        server,
+        name,
+        Interface::Tracker,
+        sensors,
+        |conn, name, n, claim| {
+            Ok(VrpnTrackerServer {
+                header: Header::new::<VrpnTrackerServer>(),
+                server: TrackerServer::new(name, conn, n)?,
+                _name: claim,
+            })
+        },
+    )
 }
 
 /// Frees a tracker server (NULL is ignored).
@@ -208,7 +251,7 @@ pub extern "C" fn vrpn_tracker_server_report_pose(
             (
                 doubles::<3>(pos, "pos")?,
                 doubles::<4>(quat, "quat")?,
-                time_arg(t.server.connection(), time),
+                time_arg(t.server.connection(), time)?,
             )
         };
         t.server.report_pose(sensor, time, pos, quat)?;
@@ -216,8 +259,9 @@ pub extern "C" fn vrpn_tracker_server_report_pose(
     }))
 }
 
-/// Reports a velocity of `sensor`: `vel` 3 doubles (m/s), `vel_quat` 4 (the rotation over
-/// `dt` seconds, x, y, z, w); `time` NULL for now.
+/// Reports a velocity of `sensor`: `vel` 3 doubles (m/s, tracker frame), `vel_quat` 4 (the
+/// rotation over `dt` seconds in the tracker's frame, x, y, z, w: the orientation `dt` later
+/// is `vel_quat * quat`); `time` NULL for now.
 #[no_mangle]
 pub extern "C" fn vrpn_tracker_server_report_velocity(
     tracker: *mut VrpnTrackerServer,
@@ -233,7 +277,7 @@ pub extern "C" fn vrpn_tracker_server_report_velocity(
             (
                 doubles::<3>(vel, "vel")?,
                 doubles::<4>(vel_quat, "vel_quat")?,
-                time_arg(t.server.connection(), time),
+                time_arg(t.server.connection(), time)?,
             )
         };
         t.server.report_velocity(sensor, time, vel, vel_quat, dt)?;
@@ -247,6 +291,7 @@ pub extern "C" fn vrpn_tracker_server_report_velocity(
 pub struct VrpnButtonServer {
     header: Header,
     server: ButtonServer,
+    _name: Claim,
 }
 
 impl Object for VrpnButtonServer {
@@ -257,19 +302,27 @@ impl Object for VrpnButtonServer {
     }
 }
 
-/// Serves button device `name` with `buttons` buttons (1..=256) on `server`; NULL on failure.
+/// Serves button device `name` with `buttons` buttons (1..=256) on `server`; NULL on failure
+/// (see `vrpn_tracker_server_new`).
 #[no_mangle]
 pub extern "C" fn vrpn_button_server_new(
     server: *mut VrpnServer,
     name: *const c_char,
     buttons: i32,
 ) -> *mut VrpnButtonServer {
-    device(server, name, |conn, name| {
-        Ok(VrpnButtonServer {
-            header: Header::new::<VrpnButtonServer>(),
-            server: ButtonServer::new(name, conn, size(buttons, "button", 256)?)?,
-        })
-    })
+    device(
+        server,
+        name,
+        Interface::Button,
+        buttons,
+        |conn, name, n, claim| {
+            Ok(VrpnButtonServer {
+                header: Header::new::<VrpnButtonServer>(),
+                server: ButtonServer::new(name, conn, n)?,
+                _name: claim,
+            })
+        },
+    )
 }
 
 /// Frees a button server (NULL is ignored).
@@ -307,7 +360,7 @@ pub extern "C" fn vrpn_button_server_report_changes(
 ) -> VrpnStatus {
     status(handle::with(button, |b| {
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(b.server.connection(), time) };
+        let time = unsafe { time_arg(b.server.connection(), time)? };
         b.server.set_timestamp(time);
         b.server.report_changes()?;
         Ok(VrpnStatus::Ok)
@@ -320,6 +373,7 @@ pub extern "C" fn vrpn_button_server_report_changes(
 pub struct VrpnAnalogServer {
     header: Header,
     server: RefCell<AnalogServer>,
+    _name: Claim,
 }
 
 impl Object for VrpnAnalogServer {
@@ -339,20 +393,26 @@ impl VrpnAnalogServer {
 }
 
 /// Serves analog device `name` with `channels` channels (1..=128) on `server`; NULL on
-/// failure.
+/// failure (see `vrpn_tracker_server_new`).
 #[no_mangle]
 pub extern "C" fn vrpn_analog_server_new(
     server: *mut VrpnServer,
     name: *const c_char,
     channels: i32,
 ) -> *mut VrpnAnalogServer {
-    device(server, name, |conn, name| {
-        let n = size(channels, "channel", super::types::VRPN_ANALOG_MAX_CHANNELS)?;
-        Ok(VrpnAnalogServer {
-            header: Header::new::<VrpnAnalogServer>(),
-            server: RefCell::new(AnalogServer::new(name, conn, n)?),
-        })
-    })
+    device(
+        server,
+        name,
+        Interface::Analog,
+        channels,
+        |conn, name, n, claim| {
+            Ok(VrpnAnalogServer {
+                header: Header::new::<VrpnAnalogServer>(),
+                server: RefCell::new(AnalogServer::new(name, conn, n)?),
+                _name: claim,
+            })
+        },
+    )
 }
 
 /// Frees an analog server (NULL is ignored).
@@ -391,7 +451,7 @@ pub extern "C" fn vrpn_analog_server_report(
     status(handle::with(analog, |a| {
         let mut s = a.server()?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(s.connection(), time) };
+        let time = unsafe { time_arg(s.connection(), time)? };
         s.report(Some(time))?;
         Ok(VrpnStatus::Ok)
     }))
@@ -407,7 +467,7 @@ pub extern "C" fn vrpn_analog_server_report_changes(
     status(handle::with(analog, |a| {
         let mut s = a.server()?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        let time = unsafe { time_arg(s.connection(), time) };
+        let time = unsafe { time_arg(s.connection(), time)? };
         Ok(if s.report_changes(Some(time))? {
             VrpnStatus::Ok
         } else {
@@ -423,6 +483,7 @@ pub struct VrpnDialServer {
     header: Header,
     conn: Connection,
     server: RefCell<DialServer>,
+    _name: Claim,
 }
 
 impl Object for VrpnDialServer {
@@ -433,21 +494,28 @@ impl Object for VrpnDialServer {
     }
 }
 
-/// Serves dial device `name` with `dials` dials (1..=128) on `server`; NULL on failure.
+/// Serves dial device `name` with `dials` dials (1..=128) on `server`; NULL on failure (see
+/// `vrpn_tracker_server_new`).
 #[no_mangle]
 pub extern "C" fn vrpn_dial_server_new(
     server: *mut VrpnServer,
     name: *const c_char,
     dials: i32,
 ) -> *mut VrpnDialServer {
-    device(server, name, |conn, name| {
-        let n = size(dials, "dial", super::types::VRPN_DIAL_MAX_DIALS)?;
-        Ok(VrpnDialServer {
-            header: Header::new::<VrpnDialServer>(),
-            conn: conn.clone(),
-            server: RefCell::new(DialServer::new(name, conn, n)?),
-        })
-    })
+    device(
+        server,
+        name,
+        Interface::Dial,
+        dials,
+        |conn, name, n, claim| {
+            Ok(VrpnDialServer {
+                header: Header::new::<VrpnDialServer>(),
+                conn: conn.clone(),
+                server: RefCell::new(DialServer::new(name, conn, n)?),
+                _name: claim,
+            })
+        },
+    )
 }
 
 /// Frees a dial server (NULL is ignored).
@@ -493,7 +561,7 @@ pub extern "C" fn vrpn_dial_server_report_changes(
             .try_borrow_mut()
             .map_err(|_| Failure::new(VrpnStatus::Busy, "dial server is busy"))?;
         // SAFETY: `time` is a readable VrpnTimeVal or NULL.
-        s.set_timestamp(unsafe { time_arg(&d.conn, time) });
+        s.set_timestamp(unsafe { time_arg(&d.conn, time)? });
         s.report_changes()?;
         Ok(VrpnStatus::Ok)
     }))

@@ -57,9 +57,9 @@ pub struct VrpnTrackerPose {
     pub time: VrpnTimeVal,
     /// Sensor index.
     pub sensor: i32,
-    /// Position in metres.
+    /// Position in metres, tracker frame.
     pub pos: [f64; 3],
-    /// Orientation quaternion (x, y, z, w).
+    /// Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's.
     pub quat: [f64; 4],
 }
 
@@ -82,9 +82,10 @@ pub struct VrpnTrackerVelocity {
     pub time: VrpnTimeVal,
     /// Sensor index.
     pub sensor: i32,
-    /// Linear velocity, metres per second.
+    /// Linear velocity, metres per second, tracker frame.
     pub vel: [f64; 3],
-    /// Rotation over `vel_quat_dt` seconds (x, y, z, w).
+    /// Rotation over `vel_quat_dt` seconds (x, y, z, w), expressed in the tracker's frame:
+    /// the orientation `vel_quat_dt` later is `vel_quat * quat`.
     pub vel_quat: [f64; 4],
     /// Interval of `vel_quat`, seconds.
     pub vel_quat_dt: f64,
@@ -110,7 +111,7 @@ pub struct VrpnTrackerAcceleration {
     pub time: VrpnTimeVal,
     /// Sensor index.
     pub sensor: i32,
-    /// Linear acceleration, metres per second squared.
+    /// Linear acceleration, metres per second squared, tracker frame.
     pub acc: [f64; 3],
     /// Change of rotation rate over `acc_quat_dt` seconds (x, y, z, w).
     pub acc_quat: [f64; 4],

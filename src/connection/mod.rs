@@ -24,6 +24,7 @@ mod open;
 mod printer;
 mod replay_control;
 mod service;
+mod waiting;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -47,7 +48,9 @@ pub use replay_control::ReplayControl;
 pub use service::ServiceClass;
 
 pub use crate::proto::clock::{ClockSyncConfig, Estimate};
-pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
+pub use crate::proto::{
+    ConnectionEvent, ConnectionState, DropReason, Limits, NameKind, Notice, NoticeKind, Severity,
+};
 
 /// Largest payload a VRPN peer can receive over TCP (64000-byte buffer less the header).
 pub const MAX_PAYLOAD: usize = wire::MAX_PAYLOAD;
@@ -87,6 +90,9 @@ struct Inner {
     /// Senders whose texts the default printer shows (with its handler), or that were muted
     /// (no handler).
     printed: RefCell<Vec<(i32, Option<HandlerId>)>>,
+    /// Someone waits on the reactor's descriptor from outside ([`Connection::fd`]): every
+    /// pass sets the reactor's timer for this connection's next deadline.
+    watched: Cell<bool>,
 }
 
 /// A VRPN connection handle. Clones share the connection.
@@ -156,6 +162,7 @@ impl Connection {
                 liveness_next: Cell::new(Some(None)),
                 liveness_started: Cell::new(false),
                 printed: RefCell::new(Vec::new()),
+                watched: Cell::new(false),
             }),
         }
     }
@@ -620,6 +627,9 @@ impl Connection {
         if outer {
             clock.end();
         }
+        if self.inner.watched.get() {
+            self.arm_wakeup();
+        }
         Ok(())
     }
 
@@ -781,22 +791,16 @@ impl Connection {
     /// nothing: call [`mainloop`](Self::mainloop) next. This is how a server sleeps until its
     /// next device report without spinning a core.
     pub fn wait_until(&self, deadline: Option<Instant>, max: Duration) -> Result<bool, Error> {
-        let deadline = match (deadline, self.poll_timeout()) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
+        let w = self.prepare_wait(deadline);
         match self.reactor() {
-            Some(r) => r
-                .wait(deadline, max)
+            // One `epoll_wait` that also takes the events (the reactor's timer wakes it at the
+            // deadline); a `Waiter` would poll the descriptor and then take them.
+            Some(r) if !w.ready() => r
+                .wait(w.deadline(), max)
                 .map_err(|e| Error::io("polling sockets", e)),
+            Some(r) => r.poll_now().map_err(|e| Error::io("polling sockets", e)),
             None => {
-                // Nothing to wait on but time.
-                let until = deadline
-                    .map_or(max, |d| d.saturating_duration_since(Instant::now()))
-                    .min(max);
-                if !until.is_zero() {
-                    std::thread::sleep(until);
-                }
+                w.block(max).map_err(|e| Error::io("waiting", e))?;
                 Ok(false)
             }
         }

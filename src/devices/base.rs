@@ -170,7 +170,7 @@ impl RemoteCore {
         reactor: Option<&crate::net::Reactor>,
         name: &str,
     ) -> Result<(String, Connection), Error> {
-        let parsed = DeviceName::parse(name)?;
+        let parsed = DeviceName::parse_remote(name)?;
         let conn = match reactor {
             Some(r) => Connection::open_in(r, name)?,
             None => Connection::open_location(&parsed)?,
@@ -225,6 +225,18 @@ impl RemoteCore {
     /// The connection this remote uses.
     pub fn connection(&self) -> &Connection {
         &self.conn
+    }
+
+    /// Blocks until data arrives, the connection has timed work due, or `timeout` passes,
+    /// without spinning ([`Connection::wait`]); returns whether data arrived. Call
+    /// [`mainloop`](Self::mainloop) next.
+    pub fn wait(&self, timeout: std::time::Duration) -> Result<bool, Error> {
+        self.conn.wait(timeout)
+    }
+
+    /// The descriptor to wait on in another event loop ([`Connection::fd`]).
+    pub fn fd(&self) -> Option<std::os::fd::RawFd> {
+        self.conn.fd()
     }
 
     /// The device (sender) name.

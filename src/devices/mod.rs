@@ -14,12 +14,15 @@ pub mod button;
 pub mod dial;
 pub mod examples;
 pub mod force;
+pub mod function_generator;
 pub mod imager;
 pub mod latest;
 pub mod mutex;
 pub mod peer_mutex;
 pub mod poser;
+pub mod redundant;
 pub mod shared_object;
+pub mod sound;
 pub mod text;
 pub mod text_device;
 pub mod tracker;
@@ -39,6 +42,8 @@ builder::remote_builder!(
     imager::ImagerRemote,
     imager::ImagerPoseRemote,
     aux_logger::AuxLoggerRemote,
+    function_generator::FunctionGeneratorRemote,
+    sound::SoundClient,
 );
 
 /// A device a server runs: polled from the server loop, which sleeps until the earliest

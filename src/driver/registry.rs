@@ -157,6 +157,8 @@ pub enum Interface {
     Poser,
     /// Force feedback (`vrpn_ForceDevice`).
     ForceDevice,
+    /// Image streams (`vrpn_Imager`).
+    Imager,
 }
 
 impl Interface {
@@ -171,6 +173,7 @@ impl Interface {
             Interface::AnalogOutput => "analog output",
             Interface::Poser => "poser",
             Interface::ForceDevice => "force device",
+            Interface::Imager => "imager",
         }
     }
 }

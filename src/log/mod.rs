@@ -48,9 +48,8 @@ pub(crate) fn open_sink(path: &str) -> Result<LogWriter<Box<dyn std::io::Write>>
         .write(true)
         .create_new(true)
         .open(path)
-        .map_err(|error| LogError::Io {
+        .map_err(|error| LogError::Create {
             path: path.into(),
-            offset: 0,
             error,
         })?;
     Ok(sink_from_file(file, std::path::Path::new(path)))

@@ -99,6 +99,20 @@ pub enum LogError {
         /// The refused payload length.
         len: usize,
     },
+    /// The log file to read cannot be opened (no such file, permission denied, …).
+    Open {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        error: std::io::Error,
+    },
+    /// A new log file cannot be created (it exists already, its folder does not, …).
+    Create {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        error: std::io::Error,
+    },
 }
 
 impl LogError {
@@ -108,7 +122,9 @@ impl LogError {
             LogError::Io { path, .. }
             | LogError::BadCookie { path, .. }
             | LogError::BadEntry { path, .. }
-            | LogError::PayloadTooLong { path, .. } => path,
+            | LogError::PayloadTooLong { path, .. }
+            | LogError::Open { path, .. }
+            | LogError::Create { path, .. } => path,
         }
     }
 
@@ -117,7 +133,9 @@ impl LogError {
         match self {
             LogError::Io { offset, .. } | LogError::BadEntry { offset, .. } => Some(*offset),
             LogError::BadCookie { .. } => Some(0),
-            LogError::PayloadTooLong { .. } => None,
+            LogError::PayloadTooLong { .. } | LogError::Open { .. } | LogError::Create { .. } => {
+                None
+            }
         }
     }
 
@@ -144,14 +162,55 @@ impl std::fmt::Display for LogError {
                 "{path}: message payload of {len} bytes is too long for a log entry (limit {})",
                 super::format::MAX_ENTRY_PAYLOAD
             ),
+            LogError::Open { error, .. } => {
+                write!(f, "cannot read log file {path}: {}", open_problem(error))
+            }
+            LogError::Create { path, error } => {
+                write!(f, "cannot create log file {}: ", path.display())?;
+                create_problem(f, path, error)
+            }
         }
+    }
+}
+
+/// Why a log file could not be opened for reading, in words.
+fn open_problem(error: &std::io::Error) -> String {
+    match error.kind() {
+        std::io::ErrorKind::NotFound => "no such file".to_owned(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".to_owned(),
+        _ => error.to_string(),
+    }
+}
+
+/// Why a new log file could not be created, in words.
+fn create_problem(
+    f: &mut std::fmt::Formatter<'_>,
+    path: &Path,
+    error: &std::io::Error,
+) -> std::fmt::Result {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.display().to_string(),
+        _ => ".".to_owned(),
+    };
+    match error.kind() {
+        std::io::ErrorKind::AlreadyExists => f.write_str(
+            "it exists already (a log is never overwritten: choose another name or move the \
+             old file away)",
+        ),
+        std::io::ErrorKind::NotFound => write!(f, "folder {folder} does not exist"),
+        std::io::ErrorKind::PermissionDenied => {
+            write!(f, "permission denied (cannot write in folder {folder})")
+        }
+        _ => write!(f, "{error}"),
     }
 }
 
 impl std::error::Error for LogError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
-            LogError::Io { error, .. } => Some(error),
+            LogError::Io { error, .. }
+            | LogError::Open { error, .. }
+            | LogError::Create { error, .. } => Some(error),
             _ => None,
         }
     }
@@ -172,9 +231,8 @@ impl LogReader {
     /// Reads the whole file at `path` and checks its cookie.
     pub fn open(path: impl AsRef<Path>) -> Result<LogReader, LogError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| LogError::Io {
+        let bytes = std::fs::read(path).map_err(|error| LogError::Open {
             path: path.to_owned(),
-            offset: 0,
             error,
         })?;
         LogReader::from_bytes(bytes, path)
@@ -340,10 +398,11 @@ mod tests {
     #[test]
     fn open_reports_missing_file_and_bad_cookie() {
         let err = LogReader::open("/nonexistent/dir/x.vrpn").unwrap_err();
-        assert!(matches!(err, LogError::Io { .. }));
-        assert!(err
-            .to_string()
-            .starts_with("/nonexistent/dir/x.vrpn: byte 0:"));
+        assert!(matches!(err, LogError::Open { .. }));
+        assert_eq!(
+            err.to_string(),
+            "cannot read log file /nonexistent/dir/x.vrpn: no such file"
+        );
         let err = LogReader::from_bytes(b"hello".to_vec(), "h").unwrap_err();
         assert!(matches!(
             err,

@@ -71,9 +71,8 @@ impl LogWriter<File> {
             .write(true)
             .create_new(true)
             .open(path)
-            .map_err(|error| LogError::Io {
+            .map_err(|error| LogError::Create {
                 path: path.to_owned(),
-                offset: 0,
                 error,
             })?;
         Ok(LogWriter::new(file, path, cookie, capacity))
@@ -345,7 +344,7 @@ mod tests {
             w.log_message(-5, 0, TimeVal::new(1, 2), &[]).unwrap();
             let err = LogWriter::create(&path, &Cookie::ours(0).to_bytes()).unwrap_err();
             assert!(
-                matches!(&err, LogError::Io { error, .. } if error.kind() == ErrorKind::AlreadyExists)
+                matches!(&err, LogError::Create { error, .. } if error.kind() == ErrorKind::AlreadyExists)
             );
         }
         let r = LogReader::open(&path).unwrap();

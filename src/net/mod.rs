@@ -5,14 +5,17 @@
 //! - `shell`: the sockets of one connection; it carries out what the protocol layer
 //!   ([`crate::proto`]) asks and feeds it what the sockets bring.
 //! - `sys`: `recvmmsg`, the one system call mio lacks.
+//! - [`Waiter`]: a connection's descriptor and deadline, to wait without holding it.
 //!
 //! Nothing here decides anything about the protocol.
 
 pub mod reactor;
 pub(crate) mod shell;
 mod sys;
+pub mod wait;
 
 pub use reactor::{Reactor, Ready};
+pub use wait::{block_any, Waiter, Wake};
 
 use std::cell::Cell;
 

@@ -107,6 +107,8 @@ struct Inner {
     poll: Poll,
     events: Events,
     timer: Option<Timer>,
+    /// The deadline the timer is set for, until it fires (see [`Reactor::arm_wakeup`]).
+    armed: Option<Instant>,
     slots: Vec<Slot>,
     free: Vec<usize>,
     /// Registrations that want wake times (when none, a poll never reads the clock).
@@ -153,6 +155,7 @@ impl Reactor {
                     poll,
                     events: Events::with_capacity(256),
                     timer: None,
+                    armed: None,
                     slots,
                     free: Vec::new(),
                     timed: 0,
@@ -285,6 +288,7 @@ impl Reactor {
                     inner.timer = Timer::new(&inner.poll);
                 }
                 let armed = inner.timer.as_ref().is_some_and(|t| t.arm(until));
+                inner.armed = armed.then_some(d);
                 // Without a timer, fall back to the poll's millisecond timeout.
                 timeout = if armed { max } else { until };
             }
@@ -320,6 +324,7 @@ impl Reactor {
                 if let Some(t) = &inner.timer {
                     t.clear();
                 }
+                inner.armed = None;
                 continue;
             }
             let Some(slot) = inner.slots.get_mut(ev.token().0).filter(|s| s.used) else {
@@ -362,6 +367,34 @@ impl Reactor {
             self.inner.activity.set(true);
         }
         Ok(any)
+    }
+
+    /// The poll's descriptor: readable while a registered socket has unread events or the
+    /// reactor's timer fired. Waiting on it (with `poll(2)`, or in another event loop's poll
+    /// set) consumes nothing: the next pass still sees every event.
+    pub fn fd(&self) -> std::os::fd::RawFd {
+        use std::os::fd::AsRawFd;
+        self.inner.state.borrow().poll.as_raw_fd()
+    }
+
+    /// Makes the descriptor turn readable at `deadline` (through the reactor's timer), unless
+    /// the timer is already set for an earlier moment that has not come (several connections
+    /// may share a reactor: the earliest wins; a wake-up too early only costs a pass).
+    /// Setting the same deadline again costs no system call. False when there is no timer.
+    pub fn arm_wakeup(&self, deadline: Instant) -> bool {
+        let mut inner = self.inner.state.borrow_mut();
+        if let Some(a) = inner.armed {
+            if a == deadline || a < deadline && a > Instant::now() {
+                return true;
+            }
+        }
+        if inner.timer.is_none() {
+            inner.timer = Timer::new(&inner.poll);
+        }
+        let until = deadline.saturating_duration_since(Instant::now());
+        let armed = inner.timer.as_ref().is_some_and(|t| t.arm(until));
+        inner.armed = armed.then_some(deadline);
+        armed
     }
 
     /// True if a serial port (a registration with wake times) is readable and its owner has

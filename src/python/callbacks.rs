@@ -93,6 +93,17 @@ impl Slot {
         });
     }
 
+    /// Calls the callable with one string argument made from `text`.
+    pub(crate) fn call_text(&self, text: &str) {
+        Python::attach(|py| {
+            let Some(f) = self.get(py) else { return };
+            let f = f.bind(py);
+            if let Err(e) = f.call1((text,)) {
+                stash(py, e, f);
+            }
+        });
+    }
+
     /// Calls the callable with no argument.
     pub(crate) fn call0(&self) {
         Python::attach(|py| {

@@ -2,63 +2,30 @@
 //!
 //! Thin classes over the Rust API: the remotes (`TrackerRemote`, `ButtonRemote`, …) share a
 //! base class `Remote` with the connection-level calls; `Server` and the device servers publish
-//! data. Everything runs on the thread that created it (`unsendable` classes): VRPN objects are
-//! single-threaded, like the Rust ones they wrap.
+//! data. Everything runs on the thread that created it: VRPN objects are single-threaded, like
+//! the Rust ones they wrap, and another thread gets `vrpn.WrongThreadError` ([`owned`]).
+//! `close()` (or a `with` block) releases an object's Rust side at once, so a server's port is
+//! free again without waiting for the garbage collector.
 //!
 //! A Python callback runs inside `mainloop()` (or a replay control), called from Rust. It must
 //! not unwind through Rust, and the loop must not stop for it, so its exception is kept
 //! ([`callbacks::stash`]) and raised by the `mainloop()` that ran it once the pass is over.
 
+mod args;
 mod callbacks;
+mod errors;
+mod owned;
 mod remote;
 mod remotes;
 mod server;
 mod values;
+mod waiting;
 
-use pyo3::create_exception;
-use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 
-use crate::error::Error;
+pub(crate) use errors::to_py;
+
 use crate::time::TimeVal;
-
-create_exception!(
-    vrpn,
-    VrpnError,
-    PyException,
-    "Base class of the errors the vrpn module raises."
-);
-create_exception!(
-    vrpn,
-    DeviceNameError,
-    VrpnError,
-    "A device name that cannot be parsed (expected DEVICE@HOST[:PORT], DEVICE@file:PATH, ...)."
-);
-create_exception!(
-    vrpn,
-    ResolveError,
-    VrpnError,
-    "A host name that does not resolve to an IPv4 address."
-);
-create_exception!(
-    vrpn,
-    LogFileError,
-    VrpnError,
-    "A log file that cannot be read or written."
-);
-
-/// The crate's error as a Python exception, with the crate's message.
-pub(crate) fn to_py(e: Error) -> PyErr {
-    let text = e.to_string();
-    match e {
-        Error::Name(_) => DeviceNameError::new_err(text),
-        Error::Resolve { .. } => ResolveError::new_err(text),
-        Error::Log(_) | Error::LogNotFound { .. } | Error::LogDamaged(_) => {
-            LogFileError::new_err(text)
-        }
-        _ => VrpnError::new_err(text),
-    }
-}
 
 /// Seconds since the epoch as a `TimeVal`; `None` is "now" on `conn`'s clock.
 pub(crate) fn time_or_now(time: Option<f64>, conn: &crate::Connection) -> TimeVal {
@@ -72,11 +39,7 @@ pub(crate) fn time_or_now(time: Option<f64>, conn: &crate::Connection) -> TimeVa
 #[pymodule]
 #[pyo3(name = "_vrpn")]
 fn vrpn_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("VrpnError", py.get_type::<VrpnError>())?;
-    m.add("DeviceNameError", py.get_type::<DeviceNameError>())?;
-    m.add("ResolveError", py.get_type::<ResolveError>())?;
-    m.add("LogFileError", py.get_type::<LogFileError>())?;
+    errors::add_classes(m)?;
     values::add_classes(m)?;
     remote::add_classes(m)?;
     remotes::add_classes(m)?;

@@ -1,8 +1,10 @@
 //! What every remote shares (`vrpn.Remote`, the base class of `TrackerRemote` & co.), the
 //! connection-level callbacks it and `vrpn.Server` offer, and `vrpn.Replay`.
 
+use std::any::Any;
+use std::cell::RefCell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::gc::PyVisit;
@@ -10,7 +12,10 @@ use pyo3::prelude::*;
 use pyo3::PyTraverseError;
 
 use super::callbacks::{raise_pending, run, Owner, Registry};
+use super::errors::closed;
+use super::owned::Owned;
 use super::values::Notice;
+use super::waiting::{fileno, wait};
 use crate::devices::base::RemoteCore;
 use crate::dispatch::HandlerId;
 use crate::{Connection, ConnectionEvent, ConnectionState};
@@ -42,28 +47,6 @@ pub(crate) fn seconds(timeout: f64) -> PyResult<Duration> {
             "timeout must be a finite number of seconds >= 0, got {timeout}"
         ))
     })
-}
-
-/// Waits until data arrives on `conn`, its next deadline passes or `timeout` ends, with the
-/// GIL released so that other Python threads run meanwhile. A connection is not `Send`, so
-/// it cannot go to the thread-free section: the wait polls it (without blocking) and sleeps
-/// in steps of at most a millisecond between polls; Ctrl-C is honoured at each step.
-pub(crate) fn wait(py: Python<'_>, conn: &Connection, timeout: f64) -> PyResult<bool> {
-    const STEP: Duration = Duration::from_millis(1);
-    let end = Instant::now() + seconds(timeout)?;
-    loop {
-        if run(|| conn.wait(Duration::ZERO))? {
-            return Ok(true);
-        }
-        let now = Instant::now();
-        let due = conn.poll_timeout().map_or(end, |d| d.min(end));
-        if now >= due {
-            return Ok(false);
-        }
-        let nap = (due - now).min(STEP);
-        py.detach(|| std::thread::sleep(nap));
-        py.check_signals()?;
-    }
 }
 
 /// `on_event(name, f)` on `conn`, kept in `reg`.
@@ -103,6 +86,17 @@ pub(crate) fn on_notice(conn: &Connection, reg: &Registry, f: &Bound<'_, PyAny>)
     })
 }
 
+/// `on_peer_sender(f)` on `conn`: `f(name)` for each sender name a peer describes.
+pub(crate) fn on_peer_sender(
+    conn: &Connection,
+    reg: &Registry,
+    f: &Bound<'_, PyAny>,
+) -> PyResult<u64> {
+    reg.add(f, Owner::Connection, |slot| {
+        conn.on_peer_sender(move |name| slot.call_text(name))
+    })
+}
+
 /// Removes the connection handlers a Python object registered.
 pub(crate) fn remove_connection_handlers(conn: &Connection, reg: &Registry) {
     for id in reg.connection_handlers() {
@@ -138,29 +132,95 @@ remote_like!(
     crate::TextReceiver
 );
 
+/// The Rust remote behind a Python one, seen both ways.
+struct Device {
+    core: Rc<dyn RemoteLike>,
+    any: Rc<dyn Any>,
+}
+
+/// What a `Remote` holds on its thread.
+struct RemoteState {
+    /// `None` once closed.
+    dev: RefCell<Option<Device>>,
+    reg: Registry,
+}
+
+impl RemoteState {
+    /// Releases the remote: its connection callbacks go, its device callbacks go with it, and
+    /// the connection closes once no other remote uses it.
+    fn close(&self) {
+        let dev = self.dev.borrow_mut().take();
+        if let Some(d) = dev {
+            remove_connection_handlers(d.core.core().connection(), &self.reg);
+        }
+        self.reg.clear();
+    }
+}
+
+impl Drop for RemoteState {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
+
 /// Base class of the remotes: the connection, its state and events, `mainloop()`.
-#[pyclass(subclass, unsendable, module = "vrpn", name = "Remote")]
+#[pyclass(subclass, module = "vrpn", name = "Remote")]
 pub(crate) struct Remote {
-    dev: Rc<dyn RemoteLike>,
-    pub(crate) reg: Registry,
+    /// The Python class name, for messages.
+    class: &'static str,
+    /// The device (sender) name, the part before "@".
+    device: String,
+    state: Owned<RemoteState>,
 }
 
 impl Remote {
-    pub(crate) fn new(dev: Rc<dyn RemoteLike>) -> Remote {
+    pub(crate) fn new<T: RemoteLike + 'static>(class: &'static str, dev: T) -> Remote {
+        let device = dev.core().device().to_string();
+        let rc = Rc::new(dev);
+        let any: Rc<dyn Any> = rc.clone();
         Remote {
-            dev,
-            reg: Registry::default(),
+            class,
+            device,
+            state: Owned::new(RemoteState {
+                dev: RefCell::new(Some(Device { core: rc, any })),
+                reg: Registry::default(),
+            }),
         }
     }
 
-    fn conn(&self) -> &Connection {
-        self.dev.core().connection()
+    fn st(&self) -> PyResult<&RemoteState> {
+        self.state.get(self.class)
     }
-}
 
-impl Drop for Remote {
-    fn drop(&mut self) {
-        remove_connection_handlers(self.dev.core().connection(), &self.reg);
+    /// The callables this object registered.
+    pub(crate) fn reg(&self) -> PyResult<&Registry> {
+        Ok(&self.st()?.reg)
+    }
+
+    /// The Rust remote (a new reference: it outlives a `close()` from inside a callback).
+    fn core(&self) -> PyResult<Rc<dyn RemoteLike>> {
+        let st = self.st()?;
+        let dev = st.dev.borrow();
+        dev.as_ref()
+            .map(|d| d.core.clone())
+            .ok_or_else(|| closed(self.class))
+    }
+
+    /// The Rust remote of the subclass, `T`.
+    pub(crate) fn inner<T: 'static>(&self) -> PyResult<Rc<T>> {
+        let st = self.st()?;
+        let dev = st.dev.borrow();
+        let any = dev
+            .as_ref()
+            .map(|d| d.any.clone())
+            .ok_or_else(|| closed(self.class))?;
+        Ok(any
+            .downcast::<T>()
+            .unwrap_or_else(|_| unreachable!("a vrpn.{} holds its own kind", self.class)))
+    }
+
+    fn conn(&self) -> PyResult<Connection> {
+        Ok(self.core()?.core().connection().clone())
     }
 }
 
@@ -169,95 +229,153 @@ impl Remote {
     /// Services the connection: reads what arrived and runs the callbacks. Call it often
     /// (every frame, or every millisecond or so). Raises the first exception a callback raised.
     fn mainloop(&self) -> PyResult<()> {
-        run(|| self.dev.core().mainloop())
+        let dev = self.core()?;
+        run(|| dev.core().mainloop())
     }
 
     /// Sleeps until data arrives, the connection has work due, or `timeout` seconds pass,
     /// letting other Python threads run; returns whether data arrived. Call `mainloop()` next.
     fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<bool> {
-        wait(py, self.conn(), timeout)
+        wait(py, &self.conn()?, timeout)
+    }
+
+    /// The descriptor to wait on in asyncio (`loop.add_reader(r.fileno(), r.mainloop)`) or
+    /// `select`: readable when data arrives or the connection's next timed work is due.
+    fn fileno(&self) -> PyResult<i32> {
+        fileno(&self.conn()?)
     }
 
     /// The device (sender) name, the part before "@".
     #[getter]
-    fn device(&self) -> String {
-        self.dev.core().device().to_string()
+    fn device(&self) -> &str {
+        &self.device
     }
 
     /// True while the server is connected (always for a replay).
     #[getter]
-    fn connected(&self) -> bool {
-        self.conn().connected()
+    fn connected(&self) -> PyResult<bool> {
+        Ok(self.conn()?.connected())
     }
 
     /// "connecting", "connected" or "reconnecting".
     #[getter]
-    fn state(&self) -> &'static str {
-        state_name(self.conn().state())
+    fn state(&self) -> PyResult<&'static str> {
+        Ok(state_name(self.conn()?.state()))
+    }
+
+    /// True once `close()` was called.
+    #[getter]
+    fn closed(&self) -> PyResult<bool> {
+        Ok(self.st()?.dev.borrow().is_none())
     }
 
     /// Replay controls when the name was `Device@file:PATH`, else None.
     #[getter]
-    fn replay(&self) -> Option<Replay> {
-        let conn = self.conn();
-        conn.is_replay().then(|| Replay { conn: conn.clone() })
+    fn replay(&self) -> PyResult<Option<Replay>> {
+        let conn = self.conn()?;
+        Ok(conn.is_replay().then(|| Replay {
+            conn: Owned::new(conn),
+        }))
     }
 
     /// Calls `f()` on a connection event: "got_first_connection", "got_connection",
     /// "dropped_connection" or "dropped_last_connection". Returns a handle.
     fn on_event(&self, event: &str, f: &Bound<'_, PyAny>) -> PyResult<u64> {
-        on_event(self.conn(), &self.reg, event, f)
+        on_event(&self.conn()?, self.reg()?, event, f)
     }
 
     /// Calls `f(state)` whenever `state` changes. Returns a handle.
     fn on_state_change(&self, f: &Bound<'_, PyAny>) -> PyResult<u64> {
-        on_state_change(self.conn(), &self.reg, f)
+        on_state_change(&self.conn()?, self.reg()?, f)
     }
 
     /// Calls `f(notice)` with the connection's diagnostics (instead of printing them to
     /// stderr). Returns a handle.
     fn on_notice(&self, f: &Bound<'_, PyAny>) -> PyResult<u64> {
-        on_notice(self.conn(), &self.reg, f)
+        on_notice(&self.conn()?, self.reg()?, f)
+    }
+
+    /// Calls `f(name)` with each device (sender) name the server describes, as it is
+    /// described (inside `mainloop()`). Returns a handle.
+    fn on_peer_sender(&self, f: &Bound<'_, PyAny>) -> PyResult<u64> {
+        on_peer_sender(&self.conn()?, self.reg()?, f)
+    }
+
+    /// The device (sender) names the server has described so far.
+    #[getter]
+    fn peer_senders(&self) -> PyResult<Vec<String>> {
+        Ok(self.conn()?.peer_senders())
     }
 
     /// Removes a callback by the handle an `on_*` method returned.
     fn remove_callback(&self, handle: u64) -> PyResult<()> {
-        let (id, owner) = self.reg.take(handle)?;
+        let dev = self.core()?;
+        let (id, owner) = self.reg()?.take(handle)?;
         match owner {
-            Owner::Device => self.dev.remove(id),
-            Owner::Connection => self.conn().remove_handler(id),
+            Owner::Device => dev.remove(id),
+            Owner::Connection => dev.core().connection().remove_handler(id),
         };
         Ok(())
+    }
+
+    /// Releases the remote now: its callbacks are removed and the connection closes once no
+    /// other remote uses it. Any later use raises `vrpn.ClosedError`; closing twice is fine.
+    fn close(&self) -> PyResult<()> {
+        self.st()?.close();
+        Ok(())
+    }
+
+    fn __enter__(slf: Bound<'_, Self>) -> Bound<'_, Self> {
+        slf
+    }
+
+    fn __exit__(
+        &self,
+        _ty: &Bound<'_, PyAny>,
+        _value: &Bound<'_, PyAny>,
+        _traceback: &Bound<'_, PyAny>,
+    ) -> PyResult<bool> {
+        self.close()?;
+        Ok(false)
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
         let class = slf.get_type().name()?;
         let this = slf.borrow();
-        Ok(format!(
-            "<vrpn.{class} {:?} {}>",
-            this.dev.core().device(),
-            state_name(this.conn().state())
-        ))
+        let state = match this.state.mine() {
+            None => "of another thread",
+            Some(st) => match st.dev.borrow().as_ref() {
+                None => "closed",
+                Some(d) => state_name(d.core.core().connection().state()),
+            },
+        };
+        Ok(format!("<vrpn.{class} {:?} {state}>", this.device))
     }
 
     fn __traverse__(&self, visit: PyVisit<'_>) -> Result<(), PyTraverseError> {
-        self.reg.traverse(&visit)
+        match self.state.mine() {
+            Some(st) => st.reg.traverse(&visit),
+            None => Ok(()),
+        }
     }
 
     fn __clear__(&self) {
-        self.reg.clear();
+        if let Some(st) = self.state.mine() {
+            st.reg.clear();
+        }
     }
 }
 
 /// Controls of a log replay (`remote.replay` of a `Device@file:PATH` remote).
-#[pyclass(unsendable, module = "vrpn", name = "Replay")]
+#[pyclass(module = "vrpn", name = "Replay")]
 pub(crate) struct Replay {
-    conn: Connection,
+    conn: Owned<Connection>,
 }
 
 impl Replay {
     fn with<T>(&self, f: impl FnOnce(crate::connection::ReplayControl<'_>) -> T) -> PyResult<T> {
-        let r = f(self.conn.replay().expect("a replay connection"));
+        let conn = self.conn.get("Replay")?;
+        let r = f(conn.replay().expect("a replay connection"));
         raise_pending()?;
         Ok(r)
     }

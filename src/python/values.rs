@@ -34,12 +34,12 @@ impl Pose {
     fn sensor(&self) -> usize {
         self.0.sensor
     }
-    /// Position (x, y, z), metres in the tracker's frame.
+    /// Position (x, y, z), metres, in the tracker's frame.
     #[getter]
     fn pos(&self) -> (f64, f64, f64) {
         vec3(&self.0.pos)
     }
-    /// Orientation quaternion (x, y, z, w).
+    /// Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's.
     #[getter]
     fn quat(&self) -> (f64, f64, f64, f64) {
         xyzw(&self.0.quat)
@@ -49,10 +49,28 @@ impl Pose {
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
     }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
+    }
     fn __repr__(&self) -> String {
         format!(
-            "Pose(sensor={}, pos={:?}, quat={:?}, time={})",
+            "Pose(sensor={}, seq={}, pos={:?}, quat={:?}, time={})",
             self.0.sensor,
+            self.0.seq,
             self.pos(),
             self.quat(),
             fmt_time(self.time())
@@ -71,12 +89,13 @@ impl Velocity {
     fn sensor(&self) -> usize {
         self.0.sensor
     }
-    /// Linear velocity (x, y, z), m/s.
+    /// Linear velocity (x, y, z), m/s, in the tracker's frame.
     #[getter]
     fn vel(&self) -> (f64, f64, f64) {
         vec3(&self.0.vel)
     }
-    /// Rotation (x, y, z, w) the sensor undergoes during `vel_quat_dt` seconds.
+    /// Rotation (x, y, z, w) the sensor undergoes during `vel_quat_dt` seconds, expressed in
+    /// the tracker's frame: the orientation `vel_quat_dt` later is `vel_quat * quat`.
     #[getter]
     fn vel_quat(&self) -> (f64, f64, f64, f64) {
         xyzw(&self.0.vel_quat)
@@ -86,7 +105,8 @@ impl Velocity {
     fn vel_quat_dt(&self) -> f64 {
         self.0.vel_quat_dt
     }
-    /// Angular velocity (x, y, z), rad/s, as a rotation vector.
+    /// Angular velocity (x, y, z), rad/s, in the tracker's frame: the rotation vector
+    /// (axis times angle) of `vel_quat` divided by `vel_quat_dt`.
     #[getter]
     fn angular_velocity(&self) -> (f64, f64, f64) {
         vec3(&self.0.angular_velocity())
@@ -95,6 +115,23 @@ impl Velocity {
     #[getter]
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
+    }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(
@@ -117,12 +154,13 @@ impl Acceleration {
     fn sensor(&self) -> usize {
         self.0.sensor
     }
-    /// Linear acceleration (x, y, z), m/s².
+    /// Linear acceleration (x, y, z), m/s², in the tracker's frame.
     #[getter]
     fn acc(&self) -> (f64, f64, f64) {
         vec3(&self.0.acc)
     }
-    /// Change (x, y, z, w) of the velocity rotation over `acc_quat_dt` seconds.
+    /// Change (x, y, z, w) of the velocity rotation over `acc_quat_dt` seconds (tracker's
+    /// frame).
     #[getter]
     fn acc_quat(&self) -> (f64, f64, f64, f64) {
         xyzw(&self.0.acc_quat)
@@ -136,6 +174,23 @@ impl Acceleration {
     #[getter]
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
+    }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(
@@ -173,6 +228,23 @@ impl ButtonChange {
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
     }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
+    }
     fn __repr__(&self) -> String {
         format!(
             "ButtonChange(button={}, state={}, time={})",
@@ -203,6 +275,17 @@ impl ButtonStates {
     #[getter]
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
+    }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
     }
     fn __repr__(&self) -> String {
         format!(
@@ -238,6 +321,23 @@ impl AnalogReport {
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
     }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
+    }
     fn __repr__(&self) -> String {
         format!(
             "AnalogReport(channels={:?}, time={})",
@@ -267,6 +367,23 @@ impl DialUpdate {
     #[getter]
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
+    }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
+    }
+    /// When it arrived here: the local wall clock (seconds since the epoch) of the
+    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+    #[getter]
+    fn arrival(&self) -> f64 {
+        self.0.arrival.as_secs_f64()
+    }
+    /// Which report of its sensor, button or dial this is (1 for the first this remote
+    /// received): a frame loop that sees the same `seq` again saw nothing new.
+    #[getter]
+    fn seq(&self) -> u64 {
+        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(
@@ -313,6 +430,11 @@ impl TextMessage {
     #[getter]
     fn time(&self) -> f64 {
         self.0.time.as_secs_f64()
+    }
+    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+    #[getter]
+    fn sender_time(&self) -> f64 {
+        self.0.sender_time.as_secs_f64()
     }
     fn __repr__(&self) -> String {
         format!(

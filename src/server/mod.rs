@@ -3,6 +3,7 @@
 
 pub mod config;
 pub mod factory;
+pub mod limits;
 pub mod options;
 pub mod run;
 

@@ -46,6 +46,9 @@ pub struct ServerOptions {
     /// time, and auxiliary loggers whose configuration line names no folder. Without it such
     /// requests are refused.
     pub log_dir: Option<String>,
+    /// Ports clients may ask this server to forward devices on (`-forwardports LOW-HIGH`,
+    /// C++ `vrpn_Forwarder_Server`); `None` refuses such requests.
+    pub forward_ports: Option<std::ops::RangeInclusive<u16>>,
     /// Listen port (default 3883; 0 picks a free one and prints it).
     pub port: u16,
     /// Call clients back at the address their connection request names rather than the
@@ -75,6 +78,7 @@ impl Default for ServerOptions {
             log_out: None,
             flush_logs: false,
             log_dir: None,
+            forward_ports: None,
             port: crate::wire::DEFAULT_PORT,
             callback_to_named_address: false,
             clock_shift: None,
@@ -95,7 +99,8 @@ pub enum ServerCommand {
 
 /// Usage text.
 pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q] [-millisleep N] \
-[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-logdir DIR] [-callbacknamed] [-clockshift S] [PORT]
+[-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-logdir DIR] [-forwardports LOW-HIGH]
+       [-callbacknamed] [-clockshift S] [PORT]
        vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
@@ -111,6 +116,10 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q]
   -logdir DIR     write the logs clients ask for (remote log names, auxiliary loggers)
                   inside DIR, under plain file names that do not exist yet; without it
                   clients' log requests are refused
+  -forwardports LOW-HIGH
+                  let clients (C++ forwarderClient, vrpn::forward::ForwarderController)
+                  open ports in LOW-HIGH and forward this server's devices there;
+                  without it such requests are refused
   -callbacknamed  call UDP-path clients back at the (numeric) address their request
                   names, not the address it came from (multi-homed clients only)
   -clockshift S   stamp messages as if this host's clock were S seconds ahead (to
@@ -165,6 +174,12 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-v" => o.verbose = true,
             "-quiet" => o.quiet = true,
             "-logdir" => o.log_dir = Some(value("-logdir")?),
+            "-forwardports" => {
+                let v = value("-forwardports")?;
+                o.forward_ports = Some(parse_port_range(&v).ok_or_else(|| {
+                    format!("-forwardports {v:?}: expected a port or a range LOW-HIGH")
+                })?);
+            }
             "-q" => o.quit_after_last = true,
             "-flush" => o.flush_logs = true,
             "-callbacknamed" => o.callback_to_named_address = true,
@@ -222,6 +237,13 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
     Ok(ServerCommand::Serve(o))
 }
 
+/// `4500` or `4500-4510`.
+fn parse_port_range(text: &str) -> Option<std::ops::RangeInclusive<u16>> {
+    let (low, high) = text.split_once('-').unwrap_or((text, text));
+    let (low, high): (u16, u16) = (low.trim().parse().ok()?, high.trim().parse().ok()?);
+    (low >= 1 && low <= high).then_some(low..=high)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -252,6 +274,14 @@ mod tests {
         assert!(serve("-callbacknamed").callback_to_named_address);
         assert!(serve("-quiet").quiet);
         assert_eq!(serve("-logdir logs").log_dir.as_deref(), Some("logs"));
+        assert_eq!(
+            serve("-forwardports 4500-4510").forward_ports,
+            Some(4500..=4510)
+        );
+        assert_eq!(serve("-forwardports 4500").forward_ports, Some(4500..=4500));
+        for bad in ["-forwardports 10-5", "-forwardports 0", "-forwardports x"] {
+            assert!(parse_args(args(bad)).is_err(), "{bad}");
+        }
         assert_eq!(serve("-clockshift -3600.5").clock_shift, Some(-3600.5));
         assert!(parse_args(args("-clockshift soon")).is_err());
         assert!(

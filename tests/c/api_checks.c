@@ -149,6 +149,33 @@ int main(void)
     CHECK(vrpn_server_connection_state(server) == VRPN_CONNECTION_STATE_LISTENING);
     CHECK(vrpn_tracker_server_new(server, "Dev0", 0) == NULL);
     CHECK(vrpn_last_error_status() == VRPN_STATUS_INVALID_ARGUMENT);
+    /* The bounds vrpn.cfg applies, a name clients can open, one device per interface/name. */
+    CHECK(vrpn_tracker_server_new(server, "Dev0", 1025) == NULL);
+    CHECK(vrpn_last_error_status() == VRPN_STATUS_INVALID_ARGUMENT);
+    CHECK(strstr(vrpn_last_error(), "1 to 1024 sensors") != NULL);
+    CHECK(vrpn_tracker_server_new(server, "Dev0", -5) == NULL);
+    CHECK(vrpn_last_error_status() == VRPN_STATUS_INVALID_ARGUMENT);
+    CHECK(vrpn_button_server_new(server, "Dev0", 257) == NULL);
+    CHECK(strstr(vrpn_last_error(), "1 to 256 buttons") != NULL);
+    CHECK(vrpn_analog_server_new(server, "Dev0", 129) == NULL);
+    CHECK(vrpn_dial_server_new(server, "Dev0", 0) == NULL);
+    CHECK(vrpn_tracker_server_new(server, "Dev0@host", 1) == NULL);
+    CHECK(vrpn_last_error_status() == VRPN_STATUS_NAME);
+    CHECK(strstr(vrpn_last_error(), "must not contain '@'") != NULL);
+    CHECK(vrpn_tracker_server_new(server, "", 1) == NULL);
+    CHECK(vrpn_last_error_status() == VRPN_STATUS_NAME);
+    VrpnTrackerServer *big = vrpn_tracker_server_new(server, "Big", 1024);
+    CHECK(big != NULL);
+    CHECK(vrpn_tracker_server_new(server, "Big", 1) == NULL);
+    CHECK(vrpn_last_error_status() == VRPN_STATUS_INVALID_ARGUMENT);
+    CHECK(strstr(vrpn_last_error(), "a tracker named \"Big\" already exists") != NULL);
+    VrpnButtonServer *big_buttons = vrpn_button_server_new(server, "Big", 1);
+    CHECK(big_buttons != NULL); /* another interface under the same name is fine */
+    CHECK(vrpn_button_server_free(big_buttons) == VRPN_STATUS_OK);
+    CHECK(vrpn_tracker_server_free(big) == VRPN_STATUS_OK);
+    big = vrpn_tracker_server_new(server, "Big", 1); /* the name is free again */
+    CHECK(big != NULL);
+    CHECK(vrpn_tracker_server_free(big) == VRPN_STATUS_OK);
     VrpnTrackerServer *ts = vrpn_tracker_server_new(server, "Dev0", 2);
     VrpnButtonServer *bs = vrpn_button_server_new(server, "Dev0", 4);
     VrpnAnalogServer *as = vrpn_analog_server_new(server, "Dev0", 3);
@@ -159,6 +186,13 @@ int main(void)
     const double pos[3] = {1.5, -2.5, 3.25}, quat[4] = {0.0, 0.6, 0.0, 0.8};
     CHECK(vrpn_tracker_server_report_pose(ts, 1, NULL, NULL, quat) ==
           VRPN_STATUS_NULL_ARGUMENT);
+    const VrpnTimeVal bad_usec = {1700000000, 5000000}, negative_usec = {1700000000, -1};
+    CHECK(vrpn_tracker_server_report_pose(ts, 1, &bad_usec, pos, quat) ==
+          VRPN_STATUS_INVALID_ARGUMENT);
+    CHECK(strstr(vrpn_last_error(), "usec must be between 0 and 999999") != NULL);
+    CHECK(vrpn_tracker_server_report_pose(ts, 1, &negative_usec, pos, quat) ==
+          VRPN_STATUS_INVALID_ARGUMENT);
+    CHECK(vrpn_button_server_report_changes(bs, &bad_usec) == VRPN_STATUS_INVALID_ARGUMENT);
     vrpn_set_default_printer(2); /* the next call sends a text the remote would print */
     CHECK(vrpn_tracker_server_report_pose(ts, 5, NULL, pos, quat) == VRPN_STATUS_UNSUPPORTED);
 
@@ -175,6 +209,16 @@ int main(void)
     double revolutions = 0.0;
     CHECK(vrpn_tracker_pose(tracker, 0, &pose) == VRPN_STATUS_NO_DATA);
     CHECK(vrpn_tracker_pose(tracker, -1, &pose) == VRPN_STATUS_INVALID_ARGUMENT);
+    /* Arguments are checked first: a NULL output is refused before data arrived too. */
+    CHECK(vrpn_tracker_pose(tracker, 0, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_tracker_velocity(tracker, 0, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_tracker_acceleration(tracker, 0, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_analog_latest(analog, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_analog_channels(analog, NULL, 4) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_analog_channels(analog, NULL, 0) == 0);
+    CHECK(vrpn_button_states(button, NULL, 4) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_button_states(button, NULL, 0) == 0);
+    CHECK(vrpn_dial_rotation(dial, 0, NULL) == VRPN_STATUS_NULL_ARGUMENT);
     CHECK(vrpn_analog_latest(analog, &report) == VRPN_STATUS_NO_DATA);
     CHECK(vrpn_analog_channels(analog, report.channel, VRPN_ANALOG_MAX_CHANNELS) == 0);
     CHECK(vrpn_button_count(button) == 0);
@@ -252,6 +296,11 @@ int main(void)
     CHECK(pose.pos[1] == -2.5 && pose.quat[3] == 0.8);
     CHECK(fabs(seconds_of(pose.time) - seconds_of(stamp)) < 0.1);
     CHECK(vrpn_tracker_pose(tracker, 1, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_tracker_pose(tracker, 0, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_button_states(button, NULL, 4) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_analog_channels(analog, NULL, 4) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_analog_latest(analog, NULL) == VRPN_STATUS_NULL_ARGUMENT);
+    CHECK(vrpn_dial_rotation(dial, 1, NULL) == VRPN_STATUS_NULL_ARGUMENT);
     CHECK(vrpn_tracker_sensor_count(tracker) == 2);
     VrpnTrackerVelocity velocity;
     CHECK(vrpn_tracker_velocity(tracker, 0, &velocity) == VRPN_STATUS_OK);

@@ -41,13 +41,14 @@ def test_objects_refuse_another_thread():
     def other():
         try:
             t.mainloop()
-        except BaseException as e:  # pyo3's PanicException is a BaseException
+        except vrpn.VrpnError as e:  # an ordinary Exception, as C returns WRONG_THREAD
             caught.append(e)
 
     th = threading.Thread(target=other)
     th.start()
     th.join()
-    assert len(caught) == 1 and "unsendable" in str(caught[0])
+    assert len(caught) == 1 and isinstance(caught[0], vrpn.WrongThreadError)
+    assert "cannot be used from another one" in str(caught[0])
     t.mainloop()  # still fine on its own thread
     assert t.pose(0) is None
 

@@ -185,13 +185,13 @@ def test_callback_cycles_are_collected():
 def test_server_errors_carry_the_crate_messages():
     server = vrpn.Server(0)
     tracker = vrpn.TrackerServer(server, "Tracker0", sensors=1)
-    with pytest.raises(vrpn.VrpnError, match="sensor number outside the configured count"):
+    with pytest.raises(vrpn.OutOfRangeError, match="sensor 3 is out of range: the device has 1 sensors"):
         tracker.report_pose(3, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
     with pytest.raises(vrpn.VrpnError, match="[Aa]ddress already in use"):
         vrpn.Server(server.port)
     with pytest.raises(ValueError, match="nic must be an IPv4 address"):
         vrpn.Server(0, nic="eth0")
-    with pytest.raises(ValueError, match="button 5 out of range"):
+    with pytest.raises(IndexError, match="button 5 is out of range"):
         vrpn.ButtonServer(server, "Button0", 2).set_button(5, True)
     with pytest.raises(ValueError, match="severity must be"):
         vrpn.TextSender(server, "T").send("x", severity="loud")

@@ -148,16 +148,19 @@ pub struct TrackerVelocity {
     pub seq: u64,
     /// Sensor index.
     pub sensor: usize,
-    /// Linear velocity, m/s.
+    /// Linear velocity, m/s, tracker frame.
     pub vel: Vector3<f64>,
-    /// Rotation the sensor undergoes during `vel_quat_dt` seconds.
+    /// Rotation the sensor undergoes during `vel_quat_dt` seconds, expressed in the tracker's
+    /// frame: the orientation `vel_quat_dt` later is `vel_quat * quat` (as C++ VRPN's
+    /// dead-reckoning filter applies it).
     pub vel_quat: UnitQuaternion<f64>,
     /// Seconds `vel_quat` spans.
     pub vel_quat_dt: f64,
 }
 
 impl TrackerVelocity {
-    /// Angular velocity in rad/s (rotation vector), from the wire's rotation-over-dt.
+    /// Angular velocity in rad/s, tracker frame: the rotation vector of `vel_quat` divided by
+    /// `vel_quat_dt`.
     pub fn angular_velocity(&self) -> Vector3<f64> {
         rotation_rate(&self.vel_quat, self.vel_quat_dt)
     }
@@ -176,7 +179,7 @@ pub struct TrackerAcceleration {
     pub seq: u64,
     /// Sensor index.
     pub sensor: usize,
-    /// Linear acceleration, m/s².
+    /// Linear acceleration, m/s², tracker frame.
     pub acc: Vector3<f64>,
     /// Change of the velocity rotation over `acc_quat_dt` seconds.
     pub acc_quat: UnitQuaternion<f64>,
@@ -185,7 +188,7 @@ pub struct TrackerAcceleration {
 }
 
 impl TrackerAcceleration {
-    /// Angular acceleration in rad/s²: the rotation vector of `acc_quat` is the change of the
+    /// Angular acceleration in rad/s², tracker frame: the rotation vector of `acc_quat` is the change of the
     /// angular rate (rad/s) accumulated over `acc_quat_dt`, so it is divided by dt twice.
     pub fn angular_acceleration(&self) -> Vector3<f64> {
         rotation_rate(&self.acc_quat, self.acc_quat_dt) / self.acc_quat_dt

@@ -182,6 +182,7 @@ pub mod clock;
 pub mod dial;
 pub mod fixed_text;
 pub mod force;
+pub mod forwarder;
 pub mod function_generator;
 pub mod imager;
 pub mod mutex;
