@@ -50,6 +50,8 @@ pub struct NameError {
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum NameProblem {
+    /// No `@` in the name of a remote device.
+    NoAt,
     /// Nothing before the `@`.
     EmptyDevice,
     /// Nothing after the `@`.
@@ -60,9 +62,27 @@ pub enum NameProblem {
     Location(LocationError),
 }
 
+impl std::fmt::Display for NameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "bad VRPN device name {:?}: {}", self.name, self.problem)?;
+        if self.problem == NameProblem::NoAt {
+            write!(
+                f,
+                ": a remote device is named DEVICE@HOST, for example \"{}@localhost\"",
+                self.name
+            )?;
+        }
+        f.write_str(
+            " (expected DEVICE@HOST, DEVICE@HOST:PORT, DEVICE@tcp://HOST:PORT, \
+             DEVICE@loopback: or DEVICE@file:PATH)",
+        )
+    }
+}
+
 impl std::fmt::Display for NameProblem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            NameProblem::NoAt => f.write_str("it has no '@'"),
             NameProblem::EmptyDevice => f.write_str("the device name before '@' is empty"),
             NameProblem::EmptyLocation => f.write_str("the location after '@' is empty"),
             NameProblem::DeviceTooLong => f.write_str("the device name is longer than 95 bytes"),
@@ -102,17 +122,6 @@ impl std::fmt::Display for LocationError {
 }
 
 impl std::error::Error for LocationError {}
-
-impl std::fmt::Display for NameError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "bad VRPN device name {:?}: {} (expected DEVICE@HOST, DEVICE@HOST:PORT, \
-             DEVICE@tcp://HOST:PORT, DEVICE@loopback: or DEVICE@file:PATH)",
-            self.name, self.problem
-        )
-    }
-}
 
 impl std::error::Error for NameError {}
 
@@ -164,10 +173,7 @@ impl DeviceName {
         if !name.contains('@') && !name.is_empty() {
             return Err(NameError {
                 name: name.to_string(),
-                problem: format!(
-                    "it has no '@': a remote device is named DEVICE@HOST, for example \
-                     \"{name}@localhost\""
-                ),
+                problem: NameProblem::NoAt,
             });
         }
         Self::parse(name)

@@ -177,7 +177,7 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-forwardports" => {
                 let v = value("-forwardports")?;
                 o.forward_ports = Some(parse_port_range(&v).ok_or_else(|| {
-                    format!("-forwardports {v:?}: expected a port or a range LOW-HIGH")
+                    OptionError::BadValue("-forwardports", v.clone(), "a port or a range LOW-HIGH")
                 })?);
             }
             "-q" => o.quit_after_last = true,
