@@ -41,3 +41,15 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &magellan::DRIVER,
 ];
+
+/// The simulators `vrpn_device_sim` can run (the `sim` feature): a driver with a simulator
+/// adds its `sim::SIMULATOR` here.
+#[cfg(feature = "sim")]
+pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &cerealbox::sim::SIMULATOR,
+    &dyna::sim::SIMULATOR,
+    &fastrak::sim::SIMULATOR,
+    &flock::sim::SIMULATOR,
+    &joylin::sim::SIMULATOR,
+    &magellan::sim::SIMULATOR,
+];

@@ -23,8 +23,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::MAX_STATIONS;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim fastrak PATH`: a Fastrak with four stations.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "fastrak",
+    about: "Polhemus Fastrak (or IS-900 in Fastrak mode): 4 stations of known poses",
+    baud: 19200,
+    line: "vrpn_Tracker_Fastrak Tracker0 {PATH} {BAUD}",
+    make: |baud| Box::new(FastrakSim::new(SimConfig::new(baud))),
+};
 
 /// Ctrl-Y: reinitialise.
 const CTRL_Y: u8 = 0x19;
