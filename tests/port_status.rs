@@ -33,17 +33,31 @@ fn a_missing_port_is_reported_once_told_to_later_clients_and_served_when_it_appe
     );
     // A client that connects now learns why nothing arrives.
     let client = Client::connect("Dyna0", server.port(), &[Interface::Tracker]).unwrap();
-    client.wait_text(0, "cannot open serial port", Duration::from_secs(5), &server);
+    client.wait_text(
+        0,
+        "cannot open serial port",
+        Duration::from_secs(5),
+        &server,
+    );
     assert!(client.poses().is_empty());
     // Plugged in: opened, reported once more on standard error, served.
     sim.plug().unwrap();
-    client.wait_until(Duration::from_secs(6), "poses once plugged in", &server, |c| {
-        c.poses().len() >= 10
-    });
+    client.wait_until(
+        Duration::from_secs(6),
+        "poses once plugged in",
+        &server,
+        |c| c.poses().len() >= 10,
+    );
     let said = server.stderr();
-    assert_eq!(said.lines().filter(|l| l.contains("cannot open")).count(), 1, "{said}");
     assert_eq!(
-        said.lines().filter(|l| l.contains("Dyna0") && l.contains("is open")).count(),
+        said.lines().filter(|l| l.contains("cannot open")).count(),
+        1,
+        "{said}"
+    );
+    assert_eq!(
+        said.lines()
+            .filter(|l| l.contains("Dyna0") && l.contains("is open"))
+            .count(),
         1,
         "{said}"
     );
@@ -53,8 +67,16 @@ fn a_missing_port_is_reported_once_told_to_later_clients_and_served_when_it_appe
     client.wait_text(0, "failed", Duration::from_secs(3), &server);
     std::thread::sleep(Duration::from_millis(2300));
     let said = server.stderr();
-    assert_eq!(said.lines().filter(|l| l.contains("failed (")).count(), 1, "{said}");
-    assert_eq!(said.lines().filter(|l| l.contains("cannot open")).count(), 2, "{said}");
+    assert_eq!(
+        said.lines().filter(|l| l.contains("failed (")).count(),
+        1,
+        "{said}"
+    );
+    assert_eq!(
+        said.lines().filter(|l| l.contains("cannot open")).count(),
+        2,
+        "{said}"
+    );
 }
 
 #[test]
@@ -62,10 +84,20 @@ fn the_simulators_run_as_a_program_and_print_the_line_that_serves_them() {
     let list = Command::new(DEVICE_SIM).arg("--list").output().unwrap();
     assert!(list.status.success());
     let text = String::from_utf8(list.stdout).unwrap();
-    for kind in ["fastrak", "flock", "magellan", "cerealbox", "dyna", "joylin"] {
+    for kind in [
+        "fastrak",
+        "flock",
+        "magellan",
+        "cerealbox",
+        "dyna",
+        "joylin",
+    ] {
         assert!(text.lines().any(|l| l.starts_with(kind)), "{kind}: {text}");
     }
-    let bad = Command::new(DEVICE_SIM).args(["nope", "/tmp/x"]).output().unwrap();
+    let bad = Command::new(DEVICE_SIM)
+        .args(["nope", "/tmp/x"])
+        .output()
+        .unwrap();
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("no simulator \"nope\""));
 
@@ -91,13 +123,19 @@ fn the_simulators_run_as_a_program_and_print_the_line_that_serves_them() {
     let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
     let client = Client::connect("Tracker0", server.port(), &[Interface::Tracker]).unwrap();
     let start = Instant::now();
-    client.wait_until(Duration::from_secs(10), "poses from the simulator", &server, |c| {
-        c.poses().len() >= 40
-    });
+    client.wait_until(
+        Duration::from_secs(10),
+        "poses from the simulator",
+        &server,
+        |c| c.poses().len() >= 40,
+    );
     let sensors: std::collections::BTreeSet<usize> =
         client.poses().iter().map(|p| p.sensor).collect();
     assert_eq!(sensors.len(), 4, "four stations");
-    eprintln!("vrpn_device_sim fastrak: 40 poses {:?} after connecting", start.elapsed());
+    eprintln!(
+        "vrpn_device_sim fastrak: 40 poses {:?} after connecting",
+        start.elapsed()
+    );
     let _ = sim.kill();
     let _ = sim.wait();
     let _ = std::fs::remove_dir_all(&dir);
