@@ -8,7 +8,7 @@ use super::DeviceModel;
 
 /// A device simulator that can run on its own on a pseudo-terminal.
 pub struct Simulator {
-    /// The name it is chosen by (`fastrak`, `dyna`, …): the driver's folder name.
+    /// The name it is chosen by: the driver's folder name.
     pub name: &'static str,
     /// One line about the simulated device and what it sends.
     pub about: &'static str,

@@ -652,3 +652,23 @@ fn a_reset_never_invents_data() {
         }
     }
 }
+
+#[test]
+fn the_is900_keyword_is_explained_and_odd_continuations_never_panic() {
+    // C++ has no vrpn_Tracker_IS900: the unknown-keyword error says what to write instead.
+    let entries =
+        crate::server::config::parse_str("vrpn_Tracker_IS900 T0 /dev/ttyUSB0 115200\n", "x")
+            .unwrap();
+    let error = entries[0]
+        .unknown_error()
+        .expect("an unknown keyword")
+        .to_string();
+    assert!(error.contains("IS900time"), "{error}");
+    for text in [
+        "vrpn_Tracker_Fastrak\\",
+        "vrpn_Tracker_Fastrak a b 9600 \\",
+        "vrpn_Tracker_Fastrak a b 9600 /\n/\n",
+    ] {
+        let _ = crate::server::config::parse_str_lenient(text, "x");
+    }
+}
