@@ -105,7 +105,7 @@ type Job<M> = Box<dyn FnOnce(&mut [PtyDevice<Noisy<M>>]) + Send>;
 /// let sim = SimulatedDevice::start("mydevice", my_model).unwrap();
 /// let line = format!("vrpn_MyDevice Device0 {} 19200\n", sim.path().display());
 /// sim.set_mute(true); // silence: the driver's watchdog must notice
-/// let count = sim.model(|m| sent(m)); // what the device has sent so far
+/// let count = sim.model(move |m| sent(m)); // what the device has sent so far
 /// # }
 /// ```
 pub struct SimulatedDevice<M: DeviceModel + 'static> {
