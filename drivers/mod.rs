@@ -30,6 +30,7 @@ pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod joylin;
 pub mod magellan;
+pub mod spaceball;
 pub mod spacemouse;
 pub mod xkeys;
 
@@ -69,6 +70,7 @@ pub static REGISTRY: &[&Driver] = &[
     &flock::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
+    &spaceball::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
