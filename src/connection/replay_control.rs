@@ -73,7 +73,8 @@ impl ReplayControl<'_> {
     }
 
     /// Plays, now, every message up to `secs` after the first one (rewinding first when that
-    /// is behind the current position).
+    /// is behind the current position). Saturates: `f64::INFINITY` plays to the end; NaN does
+    /// nothing.
     pub fn play_to_time(&self, secs: f64) {
         self.conn.with_replay(|r| r.play_to_time(secs));
         self.conn.play_due();
@@ -90,7 +91,9 @@ impl ReplayControl<'_> {
     }
 
     /// Moves to `secs` after the first message without delivering the messages in between
-    /// (descriptions on the way are still learned). Returns whether that time is in the log.
+    /// (descriptions on the way are still learned). Returns whether that time is in the log:
+    /// a time past the end (`f64::INFINITY` included) moves to the end and returns false; NaN
+    /// returns false and moves nothing.
     pub fn jump_to_time(&self, secs: f64) -> bool {
         let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
         self.conn.skip_due();

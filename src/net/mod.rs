@@ -96,6 +96,10 @@ impl PassClock {
 }
 
 impl TimeSource for PassClock {
+    fn fresh(&self) -> Now {
+        clock()
+    }
+
     fn now(&self) -> Now {
         if !self.in_pass.get() {
             return clock();

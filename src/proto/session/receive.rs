@@ -300,9 +300,9 @@ impl Session {
                 }
                 return None;
             };
-            let len = due.header.payload_len as usize;
-            self.scratch[..len]
-                .copy_from_slice(&replay.bytes()[due.payload_at..due.payload_at + len]);
+            let payload = replay.payload(&due);
+            let len = payload.len();
+            self.scratch[..len].copy_from_slice(payload);
             if let Some(w) = self.logs.incoming.as_mut() {
                 // Re-log of a replay: original entry, playback wall-clock time (as C++).
                 let _ = w.log_message(
@@ -655,7 +655,8 @@ impl Session {
             let Ok(q) = Query::decode(payload) else {
                 return None;
             };
-            let at = now.now().wall;
+            // t2 and t3: after the query's bytes were read (the pass's clock may be older).
+            let at = now.fresh().wall;
             let reply = Reply::answer(&q, at, at);
             let mut buf = [0u8; Reply::LEN];
             let n = reply.encode(&mut buf);
@@ -671,7 +672,8 @@ impl Session {
                 return None;
             };
             if let Some(c) = p.clock.as_deref_mut() {
-                c.handle_reply(&r, now.now());
+                // t4: after the reply's bytes were read.
+                c.handle_reply(&r, now.fresh());
                 p.clock_pass = None;
                 self.timeouts_changed();
             }
