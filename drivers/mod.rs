@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
 pub mod dyna;
@@ -17,6 +18,8 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod glove5dt;
+pub mod glove5dt16;
 pub mod glove5dt_usb;
 #[cfg(test)]
 mod hid_config_tests;
@@ -32,7 +35,9 @@ pub mod joylin;
 pub mod magellan;
 pub mod spaceball;
 pub mod spacemouse;
+pub mod streaming_arduino;
 pub mod xkeys;
+pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
 /// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
@@ -71,6 +76,11 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &magellan::DRIVER,
     &spaceball::DRIVER,
+    &glove5dt::DRIVER,
+    &glove5dt16::DRIVER,
+    &streaming_arduino::DRIVER,
+    &zaber::DRIVER,
+    &biosciences::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,

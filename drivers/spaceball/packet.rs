@@ -185,7 +185,7 @@ impl Framer {
         self.escaped[self.len] = escaped;
         self.times[self.len] = Some(arrived);
         self.len += 1;
-        while let Some(done) = self.complete() {
+        while let Some(done) = self.complete(arrived) {
             match done {
                 Ok(p) => {
                     self.len = 0;
@@ -196,8 +196,9 @@ impl Framer {
         }
     }
 
-    /// The buffered candidate, once it is complete: a packet, or `Err` for a bad one.
-    fn complete(&self) -> Option<Result<Packet, ()>> {
+    /// The buffered candidate, once it is complete (`arrived`: the time of its last byte):
+    /// a packet, or `Err` for a bad one.
+    fn complete(&self, arrived: Now) -> Option<Result<Packet, ()>> {
         if self.len == 0 {
             return None;
         }
@@ -217,7 +218,7 @@ impl Framer {
             kind: k,
             bytes: self.buf,
             len: self.len,
-            first_byte: self.times[0].unwrap_or_else(|| unreachable_time()),
+            first_byte: self.times[0].unwrap_or(arrived),
         }))
     }
 
@@ -228,18 +229,10 @@ impl Framer {
         self.skip(1);
         self.len = 0;
         for i in 1..n {
-            let t = times[i].unwrap_or_else(|| unreachable_time());
-            self.push(bytes[i], escaped[i], t, found);
+            if let Some(t) = times[i] {
+                self.push(bytes[i], escaped[i], t, found);
+            }
         }
-    }
-}
-
-/// Every buffered byte has a time; this is never called, but keeps the code free of panics.
-#[cold]
-fn unreachable_time() -> Now {
-    Now {
-        mono: std::time::Instant::now(),
-        wall: crate::time::TimeVal::ZERO,
     }
 }
 
