@@ -31,11 +31,15 @@ pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
+pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod pinchglove;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod uncjoystick;
+pub mod wanda;
 pub mod xkeys;
 pub mod zaber;
 
@@ -73,6 +77,7 @@ pub static REGISTRY: &[&Driver] = &[
     &dyna::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
+    &immersionbox::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
     &spaceball::DRIVER,
@@ -81,6 +86,9 @@ pub static REGISTRY: &[&Driver] = &[
     &streaming_arduino::DRIVER,
     &zaber::DRIVER,
     &biosciences::DRIVER,
+    &pinchglove::DRIVER,
+    &uncjoystick::DRIVER,
+    &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
