@@ -17,6 +17,9 @@ use vrpn::Now;
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
+/// A simulator's log: the channels of each record and when its first byte left.
+type Log = (Vec<Vec<f64>>, Vec<Instant>);
+
 /// The analog reports heard from log index `from` on, with their stamps.
 fn reports(client: &Client, from: usize) -> (Vec<Vec<f64>>, Vec<vrpn::TimeVal>) {
     client
@@ -35,7 +38,7 @@ fn analog_end_to_end<M: DeviceModel + 'static>(
     sim: SimulatedDevice<M>,
     cfg_line: &str,
     junk: &[&[u8]],
-    sent: fn(&M) -> (Vec<Vec<f64>>, Vec<Instant>),
+    sent: fn(&M) -> Log,
 ) {
     let t0 = Now::read();
     let server = ServerProcess::start(SERVER.as_ref(), cfg_line).unwrap();
@@ -122,13 +125,13 @@ fn analog_end_to_end<M: DeviceModel + 'static>(
         |c| reports(c, from).0.len() >= while_unplugged + 30,
     );
     client.wait_text(from, "is open again", Duration::from_secs(1), &server);
-    check(from, logged);
+    check(from, logged.saturating_sub(2));
 }
 
 /// Garbage with no record's first byte in it.
 const GLOVE_JUNK: &[&[u8]] = &[&[1, 2, 3], &[0x55, 0x40], &[0xFF]];
 
-fn glove_log(m: &GloveSim) -> (Vec<Vec<f64>>, Vec<Instant>) {
+fn glove_log(m: &GloveSim) -> Log {
     m.sent()
         .iter()
         .map(|r| (r.channels.to_vec(), r.first_byte))
@@ -151,6 +154,8 @@ fn polled_5dt_glove_through_vrpn_server_to_a_client() {
 fn wireless_5dt_glove_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("5dtw", || {
         let mut cfg = SimConfig::new(9600);
+        // A record takes 10.4 ms at 9600 baud: leave gaps for the garbage.
+        cfg.period = std::time::Duration::from_millis(20);
         cfg.keep_log = true;
         GloveSim::new(cfg)
     })

@@ -69,17 +69,14 @@ fn spaceball_streams_without_allocating() {
 /// Streams `device` through `driver` (an Analog named `name`) for 5 s after a warm-up, with
 /// `noise` put on the line once a second, and counts allocations inside the driver's calls.
 /// Returns the reports heard and the bytes skipped.
-fn stream_analog<D: SerialDriver, M: DeviceModel>(
+fn stream_analog<D: SerialDriver + HasStats, M: DeviceModel>(
     conn: &Connection,
     name: &str,
     driver: D,
     device: M,
     inject: fn(&mut M, &[u8], std::time::Instant),
     noise: &[u8],
-) -> (u64, u64)
-where
-    D: HasStats,
-{
+) -> (u64, u64) {
     let analog = AnalogRemote::on_connection(name, conn).unwrap();
     let reports = Rc::new(Cell::new(0u64));
     let a = reports.clone();

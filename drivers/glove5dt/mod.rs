@@ -219,6 +219,8 @@ impl Protocol for Glove5dtProtocol {
     }
 
     fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
+        // What waited in the port's buffer was sent before now: it cannot be stamped.
+        cx.flush_input();
         self.framer.clear();
         self.deadline = Some(cx.now.mono + ANSWER_TIME);
         if self.wireless {
@@ -235,7 +237,6 @@ impl Protocol for Glove5dtProtocol {
             self.step = Step::Wireless;
             return Reset::Working;
         }
-        cx.flush_input();
         cx.write(&[INIT]);
         self.step = Step::Init;
         Reset::Working

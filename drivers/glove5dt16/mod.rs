@@ -158,6 +158,8 @@ impl Protocol for Glove16Protocol {
     }
 
     fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
+        // What waited in the port's buffer was sent before now: it cannot be stamped.
+        cx.flush_input();
         self.framer.clear();
         self.announced = None;
         self.deadline = Some(cx.now.mono + LISTEN_TIME);

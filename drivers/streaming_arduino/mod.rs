@@ -99,7 +99,7 @@ impl ArduinoProtocol {
         let analogs = cfg.analogs();
         let mut ask = [0u8; 4];
         let mut w = &mut ask[..];
-        let _ = write!(w, "{analogs}\n");
+        let _ = writeln!(w, "{analogs}");
         let ask_len = 4 - w.len();
         Ok(ArduinoProtocol {
             baud: cfg.baud,
