@@ -260,7 +260,12 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Wanda",
             "vrpn_Button_PinchGlove",
             "vrpn_Joystick",
-            "vrpn_ImmersionBox"
+            "vrpn_ImmersionBox",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_FilterOneEuro"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
