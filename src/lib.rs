@@ -84,6 +84,7 @@ mod error;
 pub mod forward;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod hid;
 pub mod layered;
 pub mod log;
 pub mod name;
