@@ -718,10 +718,7 @@ class MutexRemote:
     def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
+        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
     ) -> bool: ...
 
 @final
@@ -757,10 +754,7 @@ class PeerMutex:
     def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
+        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
     ) -> bool: ...
 
 @final
@@ -792,21 +786,13 @@ class SharedInt32:
     """A shared int32: ``SharedInt32("name@host", value)`` on a client,
     ``SharedInt32.server(server, "name", value)`` on a server."""
     def __new__(
-        cls,
-        name: str,
-        value: int = 0,
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        cls, name: str, value: int = 0, serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedInt32: ...
     @staticmethod
     def server(
-        server: Server,
-        name: str,
-        value: int = 0,
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        server: Server, name: str, value: int = 0, serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedInt32: ...
     @property
     def value(self) -> int: ...
@@ -827,31 +813,20 @@ class SharedInt32:
     def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
+        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
     ) -> bool: ...
 
 @final
 class SharedFloat64:
     """A shared float64 (see SharedInt32)."""
     def __new__(
-        cls,
-        name: str,
-        value: float = 0.0,
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        cls, name: str, value: float = 0.0, serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedFloat64: ...
     @staticmethod
     def server(
-        server: Server,
-        name: str,
-        value: float = 0.0,
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        server: Server, name: str, value: float = 0.0, serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedFloat64: ...
     @property
     def value(self) -> float: ...
@@ -872,31 +847,20 @@ class SharedFloat64:
     def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
+        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
     ) -> bool: ...
 
 @final
 class SharedString:
     """A shared string (see SharedInt32)."""
     def __new__(
-        cls,
-        name: str,
-        value: str = "",
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        cls, name: str, value: str = "", serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedString: ...
     @staticmethod
     def server(
-        server: Server,
-        name: str,
-        value: str = "",
-        serialized: bool = False,
-        ignore_old: bool = False,
-        ignore_idempotent: bool = False,
+        server: Server, name: str, value: str = "", serialized: bool = False,
+        ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedString: ...
     @property
     def value(self) -> str: ...
@@ -917,8 +881,5 @@ class SharedString:
     def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
+        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
     ) -> bool: ...
