@@ -28,9 +28,13 @@ pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
+pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod pinchglove;
 pub mod spacemouse;
+pub mod uncjoystick;
+pub mod wanda;
 pub mod xkeys;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -67,8 +71,12 @@ pub static REGISTRY: &[&Driver] = &[
     &dyna::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
+    &immersionbox::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
+    &pinchglove::DRIVER,
+    &uncjoystick::DRIVER,
+    &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,

@@ -86,8 +86,14 @@ pub struct Limits {
     pub no_answer_warning: Duration,
     /// Time allowed for a TCP connect (server call-back or TCP-only client).
     pub connect_timeout: Duration,
-    /// Messages taken from one peer before others get their turn in a mainloop pass.
+    /// Messages taken from one peer in one `mainloop()` pass: every message counts (device
+    /// reports, descriptions, clock queries, messages nobody handles), and the rest waits for
+    /// the next pass, so no peer can keep a pass (and a server's devices) waiting.
     pub max_messages_per_peer_per_loop: usize,
+    /// Time one `mainloop()` pass may spend delivering messages to callbacks before it
+    /// returns; what remains is delivered by the next call. Callbacks slower than the data
+    /// arrives thus still let `mainloop()` return (after about this time plus two callbacks).
+    pub max_pass_time: Duration,
     /// Largest message payload accepted from a peer; a peer that sends a larger one is dropped
     /// with a notice. Default: the C++ receive limit (64008 padded bytes).
     pub max_message_payload: usize,
@@ -126,7 +132,8 @@ impl Default for Limits {
             retry_interval: Duration::from_secs(1),
             no_answer_warning: Duration::from_secs(3),
             connect_timeout: Duration::from_secs(5),
-            max_messages_per_peer_per_loop: 100_000,
+            max_messages_per_peer_per_loop: 1024,
+            max_pass_time: Duration::from_millis(5),
             max_message_payload: wire::MAX_TCP_PADDED_PAYLOAD,
             max_names_per_peer: wire::MAX_IDS,
             handshake_timeout: Duration::from_secs(5),
