@@ -515,14 +515,10 @@ fn a_log_of_many_sessions_replays_every_pose() {
     let r = conn.replay().unwrap();
     r.set_rate(0.0);
     r.play_to_time(f64::INFINITY);
-    assert!(r.eof(), "not at the end; notices {:?}", notices.borrow());
+    let first: Vec<String> = notices.borrow().iter().take(2).cloned().collect();
+    assert!(r.eof(), "not at the end; notices {first:?}");
     let xs = xs.borrow();
-    assert_eq!(
-        xs.len(),
-        SESSIONS,
-        "poses replayed; notices {:?}",
-        notices.borrow()
-    );
+    assert_eq!(xs.len(), SESSIONS, "poses replayed; notices {first:?}");
     assert!(xs.iter().copied().eq(0..SESSIONS), "out of order");
     let _ = std::fs::remove_file(&path);
 }
