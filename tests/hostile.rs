@@ -601,3 +601,134 @@ fn host_names_are_not_resolved_in_the_loop() {
     eprintln!("pings while host names pour in: p50 {p50:.0} µs, p99 {p99:.0} µs");
     assert!(p99 < 50_000.0, "a ping took {p99:.0} µs: the loop stalled");
 }
+
+/// A raw TCP peer that describes `names` (sender or type, id) and then writes `one` as fast as
+/// the server takes it for `secs`, reading (and counting) whatever the server sends back in a
+/// second thread. Returns the messages written and the bytes read.
+fn flood(port: u16, names: &[(i32, bool, &str)], one: Vec<u8>, secs: f64) -> (u64, u64) {
+    let mut s = raw_peer(port);
+    s.set_write_timeout(Some(Duration::from_millis(100)))
+        .unwrap();
+    let mut r = s.try_clone().unwrap();
+    r.set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let reader = std::thread::spawn(move || {
+        let (mut got, mut buf) = (0u64, vec![0u8; 65536]);
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs_f64(secs + 2.0) {
+            match r.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => got += n as u64,
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                Err(_) => break,
+            }
+        }
+        got
+    });
+    for &(id, is_sender, name) in names {
+        s.write_all(&description(id, is_sender, name.as_bytes()))
+            .unwrap();
+    }
+    let batch: Vec<u8> = one.iter().copied().cycle().take(one.len() * 256).collect();
+    let (start, mut sent) = (Instant::now(), 0u64);
+    while start.elapsed() < Duration::from_secs_f64(secs) {
+        match s.write(&batch) {
+            Ok(n) => sent += (n / one.len()) as u64,
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+            Err(_) => break, // dropped by the server
+        }
+    }
+    let _ = s.shutdown(std::net::Shutdown::Both);
+    (sent, reader.join().unwrap())
+}
+
+/// Issue 29, item 2: one client's clock-query flood does not stall the server. Every message
+/// counts against a peer's budget for a pass (1,024), clock queries too (they bring no
+/// delivery, and used to keep the pass reading for up to 1.1 s): a TCP watcher beside the
+/// flood keeps its poses.
+#[test]
+fn a_clock_query_flood_starves_nobody() {
+    use vrpn::wire::payload::clock;
+    let server = common::start_server(CFG, 0);
+    let a = Legit::new(server.port, true);
+    assert!(a.wait_for_poses(Duration::from_secs(5)));
+    a.run_for(Duration::from_millis(300));
+    let mut query = [0u8; clock::Query::LEN];
+    clock::Query {
+        id: 7,
+        query_sent: TimeVal::now(),
+    }
+    .encode(&mut query);
+    let port = server.port;
+    let flooder = std::thread::spawn(move || {
+        let names = [
+            (0, true, clock::SENDER),
+            (0, false, clock::QUERY),
+            (1, false, clock::REPLY),
+        ];
+        flood(port, &names, message(0, 0, &query), 3.0)
+    });
+    let got = a.run_for(Duration::from_secs(3));
+    let (sent, answered) = flooder.join().unwrap();
+    eprintln!(
+        "clock-query flood: {sent} queries in 3 s ({answered} bytes of replies); the TCP \
+         watcher got {got} poses (200/s: ~600)"
+    );
+    assert!(sent > 20_000, "the flood itself fell short: {sent}");
+    assert!(answered > 0, "the flooder's queries were never answered");
+    assert!(
+        got >= 480,
+        "the watcher got {got} of ~600 poses during the flood"
+    );
+}
+
+/// Issue 29, item 9: a flood of `Request_Tracker_To_Room` costs the requester only: the reply
+/// goes to the peer that asked (it used to be broadcast, and a watcher was dropped for 4 MiB
+/// of reliable output pending). The watcher sees no reply it did not ask for and keeps its
+/// poses.
+#[test]
+fn a_request_flood_is_answered_to_the_requester_only() {
+    use vrpn::wire::payload::tracker;
+    let server = common::start_server(CFG, 0);
+    let a = Legit::new(server.port, true);
+    assert!(a.wait_for_poses(Duration::from_secs(5)));
+    let conn = a.tracker.connection();
+    let to_room = conn.register_type(tracker::TO_ROOM).unwrap();
+    let replies = Rc::new(Cell::new(0u64));
+    let r = replies.clone();
+    conn.register_handler(to_room, vrpn::SenderFilter::Any, move |_| {
+        r.set(r.get() + 1)
+    });
+    a.run_for(Duration::from_millis(300));
+    let port = server.port;
+    let flooder = std::thread::spawn(move || {
+        let names = [
+            (0, true, "Tracker0"),
+            (0, false, tracker::REQUEST_TRACKER_TO_ROOM),
+        ];
+        flood(port, &names, message(0, 0, &[]), 3.0)
+    });
+    let got = a.run_for(Duration::from_secs(3));
+    let (sent, answered) = flooder.join().unwrap();
+    a.run_for(Duration::from_millis(300));
+    eprintln!(
+        "To_Room request flood: {sent} requests in 3 s ({answered} bytes of replies to the \
+         requester); the TCP watcher got {got} poses (~600) and {} replies",
+        replies.get()
+    );
+    assert!(sent > 20_000, "the flood itself fell short: {sent}");
+    assert!(answered > 0, "the requester got no reply");
+    assert_eq!(
+        replies.get(),
+        0,
+        "replies reached a client that never asked"
+    );
+    assert!(
+        a.tracker.connection().connected(),
+        "the watcher was dropped"
+    );
+    assert!(
+        got >= 480,
+        "the watcher got {got} of ~600 poses during the flood"
+    );
+}
