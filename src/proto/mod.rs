@@ -111,8 +111,11 @@ pub struct Limits {
     /// Server: connection requests (UDP) accepted per second, over all sources; the rest are
     /// ignored and counted in a notice at most every few seconds.
     pub max_requests_per_second: u32,
-    /// Server: call-back connects in progress at once. When a new request finds them all
-    /// still connecting, the oldest is given up (its host may be dropping SYNs).
+    /// Server: call-back connects in progress at once (default: as many as clients, so that
+    /// every client of a burst is called back at once). When a new request finds them all
+    /// still connecting, the oldest is given up if it has been connecting for longer than
+    /// [`server::CALLBACK_PATIENCE`] (its host may be dropping SYNs); otherwise the request is
+    /// ignored and its client asks again.
     pub max_pending_callbacks: usize,
     /// Server: call back the address a connection request names instead of the address it
     /// came from. C++ does this; it lets anyone aim the server's connects at a third host, so
@@ -140,7 +143,7 @@ impl Default for Limits {
             max_names_per_peer: wire::MAX_IDS,
             handshake_timeout: Duration::from_secs(5),
             max_requests_per_second: 100,
-            max_pending_callbacks: 16,
+            max_pending_callbacks: 255,
             callback_to_named_address: false,
             clock_sync: Some(clock::ClockSyncConfig::default()),
         }
