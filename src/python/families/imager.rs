@@ -475,7 +475,7 @@ impl ImagerServer {
         time: Option<f64>,
     ) -> PyResult<bool> {
         let d = self.dev()?;
-        let t = time.map(crate::time::TimeVal::from_secs_f64);
+        let t = time.map(super::super::header_time).transpose()?;
         run(|| d.send_begin_frame(&extent(c_min, c_max, r_min, r_max, d_min, d_max), t))
     }
 
@@ -493,7 +493,7 @@ impl ImagerServer {
         time: Option<f64>,
     ) -> PyResult<bool> {
         let d = self.dev()?;
-        let t = time.map(crate::time::TimeVal::from_secs_f64);
+        let t = time.map(super::super::header_time).transpose()?;
         run(|| d.send_end_frame(&extent(c_min, c_max, r_min, r_max, d_min, d_max), t))
     }
 
@@ -517,7 +517,7 @@ impl ImagerServer {
     ) -> PyResult<bool> {
         let d = self.dev()?;
         let e = extent(c_min, c_max, r_min, r_max, d_min, d_max);
-        let t = time.map(crate::time::TimeVal::from_secs_f64);
+        let t = time.map(super::super::header_time).transpose()?;
         match value_type {
             "u8" => run(|| d.send_region_packed(channel, &e, data, t)),
             "u16" => {

@@ -135,10 +135,6 @@ fn policy(name: &str) -> PyResult<SerializerPolicy> {
     }
 }
 
-fn when_arg(when: Option<f64>, conn: &crate::Connection) -> TimeVal {
-    time_or_now(when, conn)
-}
-
 macro_rules! shared_class {
     ($class:ident, $name:literal, $t:ty, $py:ty, $default:expr, $new_sig:literal, $server_sig:literal) => {
         #[doc = concat!("A shared value: `", $name, "(\"name@host\", value)` on a client, `",
@@ -221,7 +217,7 @@ macro_rules! shared_class {
             #[pyo3(signature = (value, when = None))]
             fn set(&self, value: $py, when: Option<f64>) -> PyResult<()> {
                 let o = self.o()?;
-                let t = when_arg(when, o.connection());
+                let t = time_or_now(when, o.connection())?;
                 run(|| o.set_at(value, t))
             }
 
