@@ -75,14 +75,8 @@ pub fn attach_default_printer(conn: &Connection, ids: &BaseIds) {
 pub fn serve_pings(conn: &Connection, ids: &BaseIds) {
     let ids = *ids;
     conn.register_handler(ids.ping, SenderFilter::Only(ids.sender), move |m| {
-        // To the pinging peer only: a ping flood costs the pinger, not its neighbours.
-        let _ = m.reply(
-            m.connection().now().wall,
-            ids.pong,
-            ids.sender,
-            &[],
-            class::RELIABLE,
-        );
+        let c = m.connection();
+        let _ = c.pack_message(c.now().wall, ids.pong, ids.sender, &[], class::RELIABLE);
     });
 }
 
