@@ -10,13 +10,17 @@
 
 use crate::driver::Driver;
 
+pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
+pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod glove5dt;
+pub mod glove5dt16;
 pub mod glove5dt_usb;
 #[cfg(test)]
 mod hid_config_tests;
@@ -31,11 +35,15 @@ pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod one_euro;
 pub mod pinchglove;
+pub mod spaceball;
 pub mod spacemouse;
+pub mod streaming_arduino;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
+pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
 /// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
@@ -64,16 +72,24 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    &one_euro::DRIVER,
     // Relays of other servers' devices.
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,
+    &dtrack::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &immersionbox::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
+    &spaceball::DRIVER,
+    &glove5dt::DRIVER,
+    &glove5dt16::DRIVER,
+    &streaming_arduino::DRIVER,
+    &zaber::DRIVER,
+    &biosciences::DRIVER,
     &pinchglove::DRIVER,
     &uncjoystick::DRIVER,
     &wanda::DRIVER,
@@ -87,4 +103,16 @@ pub static REGISTRY: &[&Driver] = &[
     &hid_trackers::DRIVER,
     &evdev::DRIVER,
     &hid_generic::DRIVER,
+];
+
+/// The simulators `vrpn_device_sim` can run (the `sim` feature): a driver with a simulator
+/// adds its `sim::SIMULATOR` here.
+#[cfg(feature = "sim")]
+pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &cerealbox::sim::SIMULATOR,
+    &dyna::sim::SIMULATOR,
+    &fastrak::sim::SIMULATOR,
+    &flock::sim::SIMULATOR,
+    &joylin::sim::SIMULATOR,
+    &magellan::sim::SIMULATOR,
 ];
