@@ -14,6 +14,7 @@
 mod args;
 mod callbacks;
 mod errors;
+mod families;
 mod output_devices;
 mod owned;
 mod remote;
@@ -58,6 +59,7 @@ fn vrpn_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     remotes::add_classes(m)?;
     server::add_classes(m)?;
     output_devices::add_classes(m)?;
+    families::add_classes(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
