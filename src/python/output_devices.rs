@@ -58,10 +58,6 @@ fn secs(t: TimeVal) -> f64 {
     t.as_secs_f64()
 }
 
-fn time_arg(time: Option<f64>, conn: &crate::Connection) -> TimeVal {
-    time_or_now(time, conn)
-}
-
 // ------------------------------------------------------------------ report objects
 
 /// The output values after a client's request (`AnalogOutputServer.on_request`).
@@ -357,7 +353,8 @@ impl PoserRemote {
         time: Option<f64>,
     ) -> PyResult<()> {
         let r = slf.as_super().inner::<PsRemote>()?;
-        run(|| r.request_pose(time_arg(time, r.connection()), pos, quat))
+        let at = time_or_now(time, r.connection())?;
+        run(|| r.request_pose(at, pos, quat))
     }
 
     /// Asks for a pose relative to the last one asked for (positions add, rotations compose).
@@ -369,7 +366,8 @@ impl PoserRemote {
         time: Option<f64>,
     ) -> PyResult<()> {
         let r = slf.as_super().inner::<PsRemote>()?;
-        run(|| r.request_pose_relative(time_arg(time, r.connection()), dpos, dquat))
+        let at = time_or_now(time, r.connection())?;
+        run(|| r.request_pose_relative(at, dpos, dquat))
     }
 
     /// Asks for a velocity: `vel`, and the rotation `quat` done in `dt` seconds.
@@ -382,7 +380,8 @@ impl PoserRemote {
         time: Option<f64>,
     ) -> PyResult<()> {
         let r = slf.as_super().inner::<PsRemote>()?;
-        run(|| r.request_pose_velocity(time_arg(time, r.connection()), vel, quat, dt))
+        let at = time_or_now(time, r.connection())?;
+        run(|| r.request_pose_velocity(at, vel, quat, dt))
     }
 }
 
