@@ -15,7 +15,9 @@ pub mod dyna;
 pub mod fastrak;
 pub mod flock;
 pub mod joylin;
+pub mod liberty;
 pub mod magellan;
+pub mod threespace;
 
 /// Every device kind the server knows, by its `vrpn.cfg` keywords. The server finds an
 /// entry's parser here; a keyword no entry serves is an error naming it.
@@ -36,5 +38,7 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &joylin::DRIVER,
+    &liberty::DRIVER,
     &magellan::DRIVER,
+    &threespace::DRIVER,
 ];

@@ -196,12 +196,12 @@ fn sample_config_commented_examples_parse() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("vrpn.cfg.sample"))
             .unwrap();
     let mut uncommented = String::new();
-    // After a Fastrak line ending in '\\' or '/', the next line continues the entry.
+    // After an entry line ending in '\\' or '/', the next line continues the entry.
     let mut continued = false;
     for line in text.lines() {
         if let Some(rest) = line.strip_prefix('#') {
             let continues = continued;
-            continued = rest.starts_with("vrpn_Tracker_Fastrak") || continues;
+            continued = rest.starts_with("vrpn_") || continues;
             continued &= rest.ends_with(['\\', '/']);
             if continues
                 || rest.starts_with("vrpn_")
@@ -245,6 +245,11 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Fastrak",
+            "vrpn_Tracker_3Space",
+            "vrpn_Tracker_Isotrak",
+            "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
@@ -255,10 +260,7 @@ fn sample_config_commented_examples_parse() {
     // The Fastrak examples' continuation lines are read as such.
     let fastraks: Vec<Fastrak> = entries
         .iter()
-        .filter_map(|e| match typed(e) {
-            DeviceConfig::Fastrak(f) => Some(f),
-            _ => None,
-        })
+        .filter_map(|e| e.config.downcast_ref::<Fastrak>().cloned())
         .collect();
     let shape: Vec<(usize, usize, bool, bool)> = fastraks
         .iter()

@@ -1,0 +1,102 @@
+//! The serial trackers of the 3SPACE family, the Liberty, the Polaris, the Crossbow, the GPS
+//! and the YEI 3-Space report without allocating: a counting global allocator around every
+//! driver call while the simulators stream through them, with reads split at random points
+//! and damage on the line.
+
+use std::cell::Cell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use vrpn::drivers::liberty::sim::{Kind, LibertySim, SimConfig as LibertySimConfig};
+use vrpn::drivers::liberty::Liberty;
+use vrpn::drivers::threespace::record::Model;
+use vrpn::drivers::threespace::sim::{SimConfig as ThreeSpaceSimConfig, ThreeSpaceSim};
+use vrpn::drivers::threespace::ThreeSpace;
+use vrpn::serial::SerialDriver;
+use vrpn::server::config::parse_one;
+use vrpn::sim::{DeviceModel, VirtualLine};
+use vrpn::{ButtonRemote, Connection, TrackerRemote};
+
+#[path = "common/counted_driver.rs"]
+mod counted_driver;
+use counted_driver::{start, Counted, COUNT};
+
+/// Streams through `driver` for 5 s after a warm-up with `noise` on the line; returns
+/// (allocations, reports).
+fn stream<D: SerialDriver, M: DeviceModel>(
+    line: &mut VirtualLine<Counted<D>, M>,
+    reports: &Rc<Cell<u64>>,
+    noise: &[u8],
+) -> (u64, u64) {
+    line.split_reads = true;
+    line.run_for(Duration::from_secs(2));
+    line.inject(noise);
+    line.run_for(Duration::from_millis(1500));
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..5 {
+        line.run_for(Duration::from_secs(1));
+        line.inject(noise);
+    }
+    (COUNT.with(Cell::get), reports.get() - before)
+}
+
+fn counter() -> Rc<Cell<u64>> {
+    Rc::new(Cell::new(0))
+}
+
+#[test]
+fn isotrak_and_3space_stream_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    for (text, model) in [
+        (
+            "vrpn_Tracker_Isotrak Iso0 /dev/ttyS0 38400 /\nStylus Pen 0\n",
+            Model::Isotrak,
+        ),
+        (
+            "vrpn_Tracker_3Space T0 /dev/ttyS0 38400\n",
+            Model::ThreeSpace,
+        ),
+    ] {
+        let cfg: ThreeSpace = parse_one(text);
+        let conn = Connection::new_loopback();
+        let driver = cfg.lifecycle(&conn).unwrap();
+        let tracker = TrackerRemote::on_connection(&cfg.name, &conn).unwrap();
+        let reports = counter();
+        let r = reports.clone();
+        tracker.on_pose(move |_| r.set(r.get() + 1));
+        let pen = ButtonRemote::on_connection("Pen", &conn).unwrap();
+        let r = reports.clone();
+        pen.on_change(move |_| r.set(r.get() + 1));
+        let mut sim = ThreeSpaceSimConfig::new(model, cfg.baud);
+        sim.stations = vec![1, 2];
+        let mut line = VirtualLine::new(Counted(driver), ThreeSpaceSim::new(sim), start(), 3);
+        let (allocations, reports) = stream(&mut line, &reports, &[0x01, 0x85, 0x02, 0x7F]);
+        assert!(reports >= 295, "{model:?}: {reports} reports");
+        assert!(line.driver.0.stats().skipped_bytes >= 20);
+        assert_eq!(allocations, 0, "{model:?}: allocations while streaming");
+    }
+}
+
+#[test]
+fn liberty_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let text = "vrpn_Tracker_Liberty L /dev/ttyS0 115200 /\nStylus Pen 1\n";
+    let cfg: Liberty = parse_one(text);
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let tracker = TrackerRemote::on_connection("L", &conn).unwrap();
+    let reports = counter();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let pen = ButtonRemote::on_connection("Pen", &conn).unwrap();
+    let r = reports.clone();
+    pen.on_change(move |_| r.set(r.get() + 1));
+    let mut sim = LibertySimConfig::new(Kind::Liberty, cfg.baud);
+    sim.stations = vec![1, 2];
+    let mut line = VirtualLine::new(Counted(driver), LibertySim::new(sim), start(), 4);
+    let (allocations, reports) = stream(&mut line, &reports, b"LYx\x02PA ");
+    assert!(reports >= 590, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 20);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
