@@ -19,8 +19,8 @@ use serde::ser::{SerializeMap, Serializer as _};
 use serde_json::ser::{CompactFormatter, Compound};
 use vrpn::connection::{set_text_printer, TextPrinter};
 use vrpn::{
-    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, TextReceiver,
-    TextSeverity, TimeVal, TrackerRemote,
+    AnalogRemote, ButtonRemote, Connection, ConnectionState, DeviceName, DialRemote, NoticeKind,
+    TextReceiver, TextSeverity, TimeVal, TrackerRemote,
 };
 
 use output::{errln, outln};
@@ -61,7 +61,9 @@ const USAGE: &str =
   -h, --help         print this help
   --version          print the version
 Reports (and the devices' text messages) go to stdout; notices, warnings and errors go to
-stderr, one line each, prefixed with the program name.";
+stderr, one line each, prefixed with the program name.
+Exit status: 0 when stopped (^C, --seconds, closed output, --until-eof), 1 when a server
+offers no device of a name given, 2 for a bad name or option.";
 
 /// The C++ options spelt with one dash.
 const CPP_OPTIONS: &[&str] = &[
@@ -181,9 +183,22 @@ fn is_replay(name: &str) -> bool {
 /// Output streams: data (reports, device texts) on stdout, diagnostics on stderr, once. The
 /// library's default printer would write device warnings to stderr beside the report line
 /// and notices in its own format; it is turned off and each connection's notices come here.
-fn report_notices(conn: &Connection) {
-    conn.on_notice(|n| errln!("{PROGRAM}: {}", n.text));
+fn report_notices(conn: &Connection, missing: Option<&Missing>) {
+    let missing = missing.cloned();
+    conn.on_notice(move |n| {
+        errln!("{PROGRAM}: {}", n.text);
+        // The server offers no device of a name given: nothing will ever come of it.
+        if let (NoticeKind::NoSuchDevice { device, .. }, Some(m)) = (&n.kind, &missing) {
+            let mut m = m.borrow_mut();
+            if !m.contains(device) {
+                m.push(device.clone());
+            }
+        }
+    });
 }
+
+/// The device names servers said they do not offer.
+type Missing = Rc<std::cell::RefCell<Vec<String>>>;
 
 /// The clock-synchronisation estimate of a device's connection as of the last loop pass:
 /// offset (server clock minus ours) and its uncertainty, in seconds; `None` while no sync is in
@@ -238,7 +253,7 @@ fn list(location: &str) -> u8 {
             return 2;
         }
     };
-    report_notices(&conn);
+    report_notices(&conn, None);
     let start = Instant::now();
     let mut connected_at = None;
     while start.elapsed() < Duration::from_secs(10) && !signals::stop_requested() {
@@ -363,6 +378,8 @@ fn print(o: &PrintOptions) -> u8 {
     let mut devices = Vec::new();
     let mut logged: Vec<Connection> = Vec::new();
     let mut watched: Vec<Connection> = Vec::new();
+    // The names a server says it does not offer: nothing will ever come of them.
+    let missing: Missing = Rc::default();
     for (name, shown) in &o.names {
         let (name, shown) = (name.as_str(), *shown);
         if let Err(e) = DeviceName::parse(name) {
@@ -377,7 +394,7 @@ fn print(o: &PrintOptions) -> u8 {
             }
         };
         if !watched.iter().any(|c| c.same_as(tracker.connection())) {
-            report_notices(tracker.connection());
+            report_notices(tracker.connection(), Some(&missing));
             watched.push(tracker.connection().clone());
         }
         if o.remote_in.is_some() || o.remote_out.is_some() {
@@ -449,6 +466,10 @@ fn print(o: &PrintOptions) -> u8 {
                 return 1;
             }
         }
+        // Every device named is missing: nothing will ever be printed.
+        if missing.borrow().len() == devices.len() {
+            break;
+        }
         if o.until_eof && watched.iter().all(replay_done) {
             break;
         }
@@ -457,7 +478,9 @@ fn print(o: &PrintOptions) -> u8 {
             let _ = d.tracker.connection().wait(Duration::from_millis(10));
         }
     }
-    0
+    // A device a server does not offer is an error, whether or not others printed.
+    let any_missing = !missing.borrow().is_empty();
+    u8::from(any_missing)
 }
 
 /// True once a replay connection has played every message of its file.

@@ -12,7 +12,7 @@ use vrpn::devices::base::set_print_threshold;
 use vrpn::driver::DeviceStatus;
 use vrpn::server::config::{self, DeviceEntry};
 use vrpn::server::options::USAGE;
-use vrpn::server::{build_devices, parse_args, BuildNote, ServerCommand, ServerLoop};
+use vrpn::server::{build_devices_in, parse_args, BuildNote, ServerCommand, ServerLoop};
 use vrpn::{Connection, Limits, TextSeverity};
 
 use output::{errln, outln};
@@ -35,6 +35,15 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let tree = match &opts.device_root {
+        Some(root) => vrpn::hid::DeviceTree::under(root),
+        None => vrpn::hid::DeviceTree::system(),
+    };
+    if opts.list_devices {
+        let listed = vrpn::hid::list::list(&tree, vrpn::drivers::SUGGESTERS);
+        outln!("{}", vrpn::hid::list::render(&listed).trim_end());
+        return ExitCode::SUCCESS;
+    }
     signals::install();
     if let Some(shift) = opts.clock_shift {
         vrpn::time::shift_wall_clock(shift);
@@ -90,23 +99,18 @@ fn main() -> ExitCode {
     let status: vrpn::driver::StatusSink = std::rc::Rc::new(|name: &str, status: &DeviceStatus| {
         errln!("{PROGRAM}: {name}: {status}");
     });
-    let devices = build_devices(
-        &entries,
-        &conn,
-        opts.warn_only,
-        Some(status),
-        |note| match note {
-            BuildNote::Opened { entry, name } if verbose => {
-                errln!(
-                    "{PROGRAM}: opening {}: {name} ({})",
-                    entry.keyword,
-                    entry.location
-                );
-            }
-            BuildNote::Opened { .. } => {}
-            BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
-        },
-    );
+    let cx = vrpn::driver::BuildContext::with_status(&conn, status).with_device_tree(tree);
+    let devices = build_devices_in(&entries, &cx, opts.warn_only, |note| match note {
+        BuildNote::Opened { entry, name } if verbose => {
+            errln!(
+                "{PROGRAM}: opening {}: {name} ({})",
+                entry.keyword,
+                entry.location
+            );
+        }
+        BuildNote::Opened { .. } => {}
+        BuildNote::Skipped { error, .. } => errln!("{PROGRAM}: {error}, skipped"),
+    });
     let mut devices = match devices {
         Ok(d) => d,
         Err(e) => {

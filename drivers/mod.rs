@@ -11,13 +11,43 @@
 use crate::driver::Driver;
 
 pub mod cerealbox;
+pub mod controls;
 pub mod dyna;
+pub mod evdev;
 pub mod fastrak;
 pub mod flock;
+pub mod gamepads;
+pub mod glove5dt_usb;
+#[cfg(test)]
+mod hid_config_tests;
+#[cfg(test)]
+mod hid_e2e;
+pub mod hid_generic;
+pub mod hid_pad;
+pub mod hid_quat;
+pub mod hid_trackers;
+pub mod hmd;
+pub mod imager_stream_buffer;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod spacemouse;
 pub mod threespace;
+pub mod xkeys;
+
+/// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
+/// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
+pub static SUGGESTERS: &[fn(&crate::hid::NodeInfo) -> Option<String>] = &[
+    spacemouse::suggest,
+    xkeys::suggest,
+    gamepads::suggest,
+    controls::suggest,
+    glove5dt_usb::suggest,
+    hmd::suggest,
+    hid_trackers::suggest,
+    hid_generic::suggest,
+    evdev::suggest,
+];
 
 /// Every device kind the server knows, by its `vrpn.cfg` keywords. The server finds an
 /// entry's parser here; a keyword no entry serves is an error naming it.
@@ -32,6 +62,8 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    // Relays of other servers' devices.
+    &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,
@@ -41,4 +73,14 @@ pub static REGISTRY: &[&Driver] = &[
     &liberty::DRIVER,
     &magellan::DRIVER,
     &threespace::DRIVER,
+    // USB HID devices (hidraw) and Linux input devices (evdev).
+    &spacemouse::DRIVER,
+    &xkeys::DRIVER,
+    &gamepads::DRIVER,
+    &controls::DRIVER,
+    &glove5dt_usb::DRIVER,
+    &hmd::DRIVER,
+    &hid_trackers::DRIVER,
+    &evdev::DRIVER,
+    &hid_generic::DRIVER,
 ];

@@ -84,6 +84,7 @@ mod error;
 pub mod forward;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod hid;
 pub mod layered;
 pub mod log;
 pub mod name;
@@ -103,8 +104,8 @@ pub mod time;
 pub mod wire;
 
 pub use connection::{
-    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, Limits, Notice, ServiceClass,
-    Severity,
+    Connection, ConnectionEvent, ConnectionOptions, ConnectionState, DropReason, Limits, NameKind,
+    Notice, NoticeKind, ServiceClass, Severity,
 };
 pub use devices::analog::{AnalogExample, AnalogRemote, AnalogReport, AnalogServer};
 pub use devices::aux_logger::{AuxLoggerRemote, AuxLoggerServer, LogFiles, LoggingReport};

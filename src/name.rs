@@ -79,6 +79,7 @@ impl DeviceName {
         };
         let (device, location_text) = match (name.find('@'), name.rfind('@')) {
             (Some(first), Some(last)) => (&name[..first], &name[last + 1..]),
+            // A bare location (`host:port`) names a connection, as in C++.
             _ => (name, name),
         };
         if device.is_empty() {
@@ -96,6 +97,22 @@ impl DeviceName {
             location_text: location_text.to_string(),
             location,
         })
+    }
+
+    /// Parses the name of a device to open a remote of: like [`parse`](Self::parse), and the
+    /// `@LOCATION` part must be there. (C++ takes a name without `@` for a host name, so
+    /// `Tracker0` would fail as "cannot resolve host", hiding what is missing.)
+    pub fn parse_remote(name: &str) -> Result<DeviceName, NameError> {
+        if !name.contains('@') && !name.is_empty() {
+            return Err(NameError {
+                name: name.to_string(),
+                problem: format!(
+                    "it has no '@': a remote device is named DEVICE@HOST, for example \
+                     \"{name}@localhost\""
+                ),
+            });
+        }
+        Self::parse(name)
     }
 
     /// Parses the part after `@`.
@@ -214,5 +231,16 @@ mod tests {
         assert!(DeviceName::parse("@host").is_err());
         assert!(DeviceName::parse("T@").is_err());
         assert!(DeviceName::parse("T@tcp://:3883").is_err());
+        // A device name without `@HOST` says so (C++ would try to resolve "Tracker0" as a
+        // host); a bare location still names a connection.
+        let e = DeviceName::parse_remote("Tracker0")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no '@'") && e.contains("Tracker0@localhost"),
+            "{e}"
+        );
+        assert!(!e.contains("resolve"), "{e}");
+        assert_eq!(net("127.0.0.1:3884").2, 3884);
     }
 }

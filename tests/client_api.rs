@@ -295,3 +295,99 @@ fn a_typo_names_what_the_server_offers() {
     assert!(!offered.contains(&"Trackr0".to_string()), "{offered:?}");
     assert!(offered.contains(&"Tracker0".to_string()), "{offered:?}");
 }
+
+/// Issue 28 item 12: `on_peer_sender` and `peer_senders()` agree; neither reports the
+/// protocol's own "VRPN Control" sender.
+#[test]
+fn sender_discovery_callback_and_list_agree() {
+    let srv = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+    let port = srv.local_port().unwrap();
+    let _tracker = TrackerServer::new("Tracker0", &srv, 1).unwrap();
+    for tcp_only in [false, true] {
+        let client = Connection::client("127.0.0.1", port, tcp_only, Limits::default()).unwrap();
+        let seen = Rc::new(RefCell::new(Vec::<String>::new()));
+        let s = seen.clone();
+        client.on_peer_sender(move |name| s.borrow_mut().push(name.to_string()));
+        let start = Instant::now();
+        while client.peer_senders().is_empty() {
+            assert!(start.elapsed() < Duration::from_secs(5), "not connected");
+            client.mainloop().unwrap();
+            srv.mainloop().unwrap();
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        pump(&[&client, &srv], Duration::from_millis(200));
+        assert_eq!(client.peer_senders(), ["Tracker0"]);
+        assert_eq!(*seen.borrow(), ["Tracker0"], "tcp_only {tcp_only}");
+    }
+}
+
+/// Issue 28 item 12: a device name without `@HOST` says the host part is missing, instead of
+/// "cannot resolve host".
+#[test]
+fn a_name_without_a_host_says_so() {
+    let Err(err) = TrackerRemote::new("Tracker0") else {
+        panic!("a name without a host was accepted");
+    };
+    let e = err.to_string();
+    assert!(
+        e.contains("no '@'") && e.contains("Tracker0@localhost"),
+        "{e}"
+    );
+    assert!(!e.contains("resolve"), "{e}");
+    assert!(matches!(err, vrpn::Error::Name(_)), "{err:?}");
+}
+
+/// Issue 28 item 8: a client names its server by the port the user gave (not the server's
+/// call-back port), and its drop notices carry a reason a program can match.
+#[test]
+fn drop_notices_name_the_servers_port_and_a_reason() {
+    let mut server = common::start_server("vrpn_Tracker_NULL Tracker0 1 60.0\n", 0);
+    let port = server.port;
+    let tracker = TrackerRemote::new(&format!("Tracker0@127.0.0.1:{port}")).unwrap();
+    let notices = Rc::new(RefCell::new(Vec::<vrpn::Notice>::new()));
+    let n = notices.clone();
+    tracker
+        .connection()
+        .on_notice(move |x| n.borrow_mut().push(x.clone()));
+    let start = Instant::now();
+    while tracker.pose(0).is_none() {
+        assert!(start.elapsed() < Duration::from_secs(5), "no pose");
+        tracker.mainloop().unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert_eq!(
+        tracker.connection().peers()[0].0,
+        format!("127.0.0.1:{port}"),
+        "the peer list names the server's port"
+    );
+    let _ = server.child.kill();
+    let _ = server.child.wait();
+    let start = Instant::now();
+    let dropped = loop {
+        let found = notices
+            .borrow()
+            .iter()
+            .find(|n| matches!(n.kind, vrpn::NoticeKind::PeerDropped { .. }))
+            .cloned();
+        if let Some(n) = found {
+            break n;
+        }
+        assert!(start.elapsed() < Duration::from_secs(5), "no drop notice");
+        tracker.mainloop().unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    assert_eq!(
+        dropped.kind,
+        vrpn::NoticeKind::PeerDropped {
+            peer: format!("127.0.0.1:{port}"),
+            reason: vrpn::DropReason::Closed,
+        }
+    );
+    assert_eq!(dropped.drop_reason(), Some(vrpn::DropReason::Closed));
+    assert!(
+        dropped.to_string().starts_with(&format!(
+            "127.0.0.1:{port} closed the connection; reconnecting"
+        )),
+        "{dropped}"
+    );
+}

@@ -213,3 +213,33 @@ fn quit_after_last_client_leaves() {
         std::thread::sleep(Duration::from_millis(20));
     }
 }
+
+/// A device name the server does not offer: one line naming the server's own port (not the
+/// call-back connection's), on either path, and a non-zero exit well before `--seconds`.
+#[test]
+fn print_devices_reports_a_missing_device_once_and_fails() {
+    let server = start_server("vrpn_Tracker_NULL Tracker0 1 60.0\n", &[]);
+    for name in [
+        format!("Nope@127.0.0.1:{}", server.port),
+        format!("Nope@tcp://127.0.0.1:{}", server.port),
+    ] {
+        let start = Instant::now();
+        let (code, _out, err) = run(PRINT, &["--seconds", "8", &name]);
+        assert_eq!(code, 1, "{err}");
+        assert!(
+            start.elapsed() < Duration::from_secs(6),
+            "took {:?}",
+            start.elapsed()
+        );
+        let lines: Vec<&str> = err
+            .lines()
+            .filter(|l| l.contains("none is named"))
+            .collect();
+        assert_eq!(lines.len(), 1, "{err}");
+        assert!(
+            lines[0].contains(&format!("127.0.0.1:{} offers Tracker0;", server.port))
+                && lines[0].contains("\"Nope\""),
+            "{err}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use super::dispatch::{SenderId, TypeId};
-use super::{Connection, ConnectionEvent, ConnectionState, Notice, Severity};
+use super::{Connection, ConnectionEvent, ConnectionState, Notice, NoticeKind, Severity};
 use crate::proto::ping::{PingAction, PingCycle, BACK_TEXT, ERROR_TEXT, WARN_TEXT};
 use crate::time::{Now, TimeSource};
 use crate::wire::class;
@@ -148,32 +148,32 @@ impl Connection {
         if !self.inner.core.borrow().session.is_client() {
             return;
         }
+        // The control sender is the protocol's own; `peer_senders` never lists it.
         let offered = self.peer_senders();
         let peer = self
             .peers()
             .first()
             .map_or_else(|| "the server".to_string(), |p| p.0.clone());
-        let missing: Vec<String> = self
-            .live_cycles()
-            .map(|l| l.device.clone())
-            .filter(|d| !offered.iter().any(|o| o == d))
-            .collect();
+        // One remote per interface of a device (a tracker, a button, … of one name) each has
+        // a cycle: one notice per missing name.
+        let mut missing: Vec<String> = Vec::new();
+        for device in self.live_cycles().map(|l| l.device.clone()) {
+            if !offered.contains(&device) && !missing.contains(&device) {
+                missing.push(device);
+            }
+        }
         for device in missing {
-            let list = offered
-                .iter()
-                .filter(|o| o.as_str() != crate::connection::names::CONTROL_SENDER)
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(", ");
+            let list = offered.join(", ");
             let text = if list.is_empty() {
                 format!("the server at {peer} offers no devices; none is named {device:?}")
             } else {
                 format!("the server at {peer} offers {list}; none is named {device:?}")
             };
-            self.dispatch_notice(Notice {
-                severity: Severity::Warning,
-                text,
-            });
+            let kind = NoticeKind::NoSuchDevice {
+                device,
+                offered: offered.clone(),
+            };
+            self.dispatch_notice(Notice::new(Severity::Warning, kind, text));
         }
     }
 }

@@ -15,7 +15,6 @@ impl Connection {
                 None,
                 Some(Box::new(move |n| {
                     crate::log::open_sink(&compound_log_name(&template, n))
-                        .map_err(|e| e.to_string())
                 })),
             );
         } else {
@@ -92,7 +91,7 @@ impl Connection {
             .borrow_mut()
             .session
             .flush_logs_all()
-            .map_err(Error::Log)
+            .map_err(Error::from_log)
     }
 
     /// Ends logging: writes the closing DISCONNECT entry of an outgoing log and flushes.
@@ -103,7 +102,7 @@ impl Connection {
             .borrow_mut()
             .session
             .close_logs(now)
-            .map_err(Error::Log)
+            .map_err(Error::from_log)
     }
 }
 

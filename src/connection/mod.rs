@@ -48,7 +48,9 @@ pub use replay_control::ReplayControl;
 pub use service::ServiceClass;
 
 pub use crate::proto::clock::{ClockSyncConfig, Estimate};
-pub use crate::proto::{ConnectionEvent, ConnectionState, Limits, Notice, Severity};
+pub use crate::proto::{
+    ConnectionEvent, ConnectionState, DropReason, Limits, NameKind, Notice, NoticeKind, Severity,
+};
 
 /// Largest payload a VRPN peer can receive over TCP (64000-byte buffer less the header).
 pub const MAX_PAYLOAD: usize = wire::MAX_PAYLOAD;

@@ -170,7 +170,7 @@ impl RemoteCore {
         reactor: Option<&crate::net::Reactor>,
         name: &str,
     ) -> Result<(String, Connection), Error> {
-        let parsed = DeviceName::parse(name)?;
+        let parsed = DeviceName::parse_remote(name)?;
         let conn = match reactor {
             Some(r) => Connection::open_in(r, name)?,
             None => Connection::open_location(&parsed)?,

@@ -77,7 +77,7 @@ impl<R: Remote> RemoteBuilder<R> {
 
     /// Opens (or shares) the connection and sets up the remote on it.
     pub fn build(self) -> Result<R, Error> {
-        let name = DeviceName::parse(&self.name)?;
+        let name = DeviceName::parse_remote(&self.name)?;
         let conn = Connection::open_location_with(&name, &self.options)?;
         R::on_connection(&name.device, &conn)
     }

@@ -293,7 +293,7 @@ impl Drop for MutexRemote {
 impl MutexRemote {
     /// Opens `Mutex@location`.
     pub fn new(name: &str) -> Result<MutexRemote, Error> {
-        let parsed = DeviceName::parse(name)?;
+        let parsed = DeviceName::parse_remote(name)?;
         let conn = Connection::open_location(&parsed)?;
         Self::on_connection(&parsed.device, &conn)
     }

@@ -325,7 +325,7 @@ impl<V: SharedValue> SharedObject<V> {
 
     /// A remote side of `Name@location`, opening (or sharing) the connection.
     pub fn open_remote(name: &str, value: V, mode: SharedMode) -> Result<Self, Error> {
-        let parsed = DeviceName::parse(name)?;
+        let parsed = DeviceName::parse_remote(name)?;
         let conn = Connection::open_location(&parsed)?;
         Self::remote(&parsed.device, &conn, value, mode)
     }

@@ -103,26 +103,50 @@ impl<T: Any> AsAny for T {
     }
 }
 
-/// What a [`DeviceSpec`] builds its devices with: the server's connection, and where the
-/// devices report their state to the program running them.
+/// What a [`DeviceSpec`] builds its devices with: the server's connection, where the
+/// devices report their state to the program running them, and where USB and input devices
+/// are found (the system's `/sys` and `/dev`, or a simulator's tree).
 pub struct BuildContext<'a> {
     conn: &'a Connection,
     status: Option<super::status::StatusSink>,
+    tree: crate::hid::DeviceTree,
+    hub: std::cell::OnceCell<crate::hid::DeviceHub>,
 }
 
 impl<'a> BuildContext<'a> {
     /// Devices on `conn`, whose state changes go nowhere but to the clients.
     pub fn new(conn: &'a Connection) -> BuildContext<'a> {
-        BuildContext { conn, status: None }
+        BuildContext {
+            conn,
+            status: None,
+            tree: crate::hid::DeviceTree::system(),
+            hub: std::cell::OnceCell::new(),
+        }
     }
 
     /// Devices that also tell `sink` about their state changes (a port that cannot be
     /// opened, a device lost and back), for the program to show.
     pub fn with_status(conn: &'a Connection, sink: super::status::StatusSink) -> BuildContext<'a> {
         BuildContext {
-            conn,
             status: Some(sink),
+            ..BuildContext::new(conn)
         }
+    }
+
+    /// HID and input devices are looked for in `tree` (`vrpn_server -devroot`), not the
+    /// system's.
+    pub fn with_device_tree(mut self, tree: crate::hid::DeviceTree) -> BuildContext<'a> {
+        self.tree = tree;
+        self.hub = std::cell::OnceCell::new();
+        self
+    }
+
+    /// What the HID and input devices built here share: the device tree, one hot-plug
+    /// watcher waiting in the connection's reactor, which nodes are taken.
+    pub fn hub(&self) -> &crate::hid::DeviceHub {
+        self.hub.get_or_init(|| {
+            crate::hid::DeviceHub::new(self.tree.clone(), self.conn.reactor().as_ref())
+        })
     }
 
     /// The server's connection.
@@ -157,6 +181,8 @@ pub enum Interface {
     Poser,
     /// Force feedback (`vrpn_ForceDevice`).
     ForceDevice,
+    /// Image streams (`vrpn_Imager`).
+    Imager,
 }
 
 impl Interface {
@@ -171,6 +197,7 @@ impl Interface {
             Interface::AnalogOutput => "analog output",
             Interface::Poser => "poser",
             Interface::ForceDevice => "force device",
+            Interface::Imager => "imager",
         }
     }
 }

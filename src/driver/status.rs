@@ -60,6 +60,12 @@ pub enum DeviceStatus {
         /// The port, as configured.
         port: String,
     },
+    /// A USB or input device the configuration names is not plugged in; it is opened as
+    /// soon as it appears (hot-plug, no polling).
+    Waiting {
+        /// What is waited for (`046d:c626`, `"USB Optical Mouse"`).
+        device: String,
+    },
     /// The open port failed or vanished (unplugged); it is reopened when it comes back.
     Lost {
         /// The port, as configured.
@@ -76,6 +82,9 @@ impl fmt::Display for DeviceStatus {
                 write!(f, "cannot open {port}: {reason}; trying again every second")
             }
             DeviceStatus::Opened { port } => write!(f, "{port} is open"),
+            DeviceStatus::Waiting { device } => {
+                write!(f, "waiting for {device} to be plugged in")
+            }
             DeviceStatus::Lost { port, reason } => {
                 write!(
                     f,

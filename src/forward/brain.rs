@@ -17,7 +17,7 @@ use crate::connection::{Connection, Limits, ServiceClass};
 use crate::devices::ServerDevice;
 use crate::dispatch::{SenderFilter, SenderId, TypeId};
 use crate::error::Error;
-use crate::proto::{Notice, Severity};
+use crate::proto::{Notice, NoticeKind, Severity};
 use crate::time::Now;
 use crate::wire::class;
 use crate::wire::payload::forwarder::{self as codec, Forward};
@@ -113,7 +113,7 @@ struct State {
 impl State {
     fn notice(&self, severity: Severity, text: String) {
         if let Some(c) = self.source.upgrade() {
-            c.dispatch_notice(Notice { severity, text });
+            c.dispatch_notice(Notice::new(severity, NoticeKind::Forwarding, text));
         }
     }
 

@@ -11,26 +11,7 @@
 use std::net::SocketAddrV4;
 use std::time::Instant;
 
-use super::Limits;
-
-/// Why an attempt failed, for choosing the words and for not repeating them.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) enum Failure {
-    /// TCP connect refused (nothing listens on the port).
-    Refused,
-    /// The connection request drew an ICMP port-unreachable.
-    Unreachable,
-    /// A TCP connect or call-back did not complete in time.
-    ConnectTimeout,
-    /// TCP came up but no cookie came in time.
-    Silent,
-    /// The peer's greeting was not a VRPN cookie (or an incompatible version).
-    BadGreeting(String),
-    /// The peer closed or failed before the handshake completed.
-    ClosedEarly(String),
-    /// Any other connect error.
-    Other(String),
-}
+use super::{DropReason, Limits};
 
 /// Connection attempts of a client.
 #[derive(Debug)]
@@ -47,7 +28,7 @@ pub(crate) struct ClientSchedule {
     pub(crate) ever_connected: bool,
     pub(crate) warned_no_answer: bool,
     /// The last failure explained to the user (not repeated until a success).
-    pub(crate) last_failure: Option<Failure>,
+    pub(crate) last_failure: Option<DropReason>,
     /// Failures since the last success.
     pub(crate) failures: u32,
     /// Sequence numbers carried across reconnects, as a C++ client does.
@@ -97,7 +78,7 @@ impl ClientSchedule {
 
     /// An attempt failed. Returns true when this failure should be explained (the first of
     /// its kind since the last success).
-    pub(crate) fn failed(&mut self, now: Instant, failure: Failure, limits: &Limits) -> bool {
+    pub(crate) fn failed(&mut self, now: Instant, failure: DropReason, limits: &Limits) -> bool {
         self.failures += 1;
         self.next_attempt = self.next_attempt.max(now + limits.retry_interval);
         let fresh = self.last_failure.as_ref() != Some(&failure);
@@ -149,13 +130,17 @@ mod tests {
             t0,
         );
         c.attempted(t0, &limits);
-        let bad = Failure::BadGreeting("HTTP/1.1".into());
-        assert!(c.failed(t0 + Duration::from_millis(1), bad.clone(), &limits));
+        let bad = DropReason::BadGreeting;
+        assert!(c.failed(t0 + Duration::from_millis(1), bad, &limits));
         assert!(c.next_attempt >= t0 + limits.retry_interval);
         assert!(!c.failed(t0 + Duration::from_millis(2), bad, &limits));
-        assert!(c.failed(t0 + Duration::from_millis(3), Failure::Silent, &limits));
+        assert!(c.failed(
+            t0 + Duration::from_millis(3),
+            DropReason::NoGreeting,
+            &limits
+        ));
         c.connected();
-        assert!(c.failed(t0, Failure::Silent, &limits));
+        assert!(c.failed(t0, DropReason::NoGreeting, &limits));
     }
 
     #[test]

@@ -17,6 +17,7 @@ pub mod client;
 pub mod clock;
 pub mod endpoint;
 pub mod names;
+pub mod notice;
 pub mod ping;
 pub mod server;
 pub mod session;
@@ -27,6 +28,7 @@ use std::time::Duration;
 use crate::time::TimeVal;
 use crate::wire;
 
+pub use notice::{DropReason, NameKind, Notice, NoticeKind, Severity};
 pub use session::{RemoteLogRequest, Session};
 
 /// What a connection is doing now.
@@ -69,26 +71,6 @@ impl ConnectionEvent {
             ConnectionEvent::DroppedLastConnection => 3,
         }
     }
-}
-
-/// How serious a [`Notice`] is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Severity {
-    /// For the curious (a peer with another minor version, a peer that left).
-    Info,
-    /// Something a user may need to act on (no answer from a server, a dropped peer).
-    Warning,
-    /// Something failed.
-    Error,
-}
-
-/// A diagnostic from the connection, in words a user can act on.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Notice {
-    /// How serious it is.
-    pub severity: Severity,
-    /// What happened and what to do.
-    pub text: String,
 }
 
 /// Limits and timings of a connection. The defaults suit a lab network.

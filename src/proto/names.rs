@@ -18,6 +18,12 @@ use crate::wire::{MAX_IDS, MAX_NAME_LEN};
 
 /// Sender 0 on every VRPN connection.
 pub const CONTROL_SENDER: &str = "VRPN Control";
+/// True for the senders of the protocol itself ([`CONTROL_SENDER`] and the clock
+/// synchronisation's), which no peer offers as a device.
+pub(crate) fn is_protocol_sender(name: &[u8]) -> bool {
+    name == CONTROL_SENDER.as_bytes() || name == crate::wire::payload::clock::SENDER.as_bytes()
+}
+
 /// Local event: the first peer finished its handshake.
 pub const GOT_FIRST_CONNECTION: &str = "VRPN_Connection_Got_First_Connection";
 /// Local event: a peer finished its handshake.

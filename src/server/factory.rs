@@ -80,15 +80,26 @@ pub fn build_devices(
     conn: &Connection,
     warn_only: bool,
     status: Option<StatusSink>,
-    mut note: impl FnMut(BuildNote<'_>),
+    note: impl FnMut(BuildNote<'_>),
 ) -> Result<Vec<Box<dyn ServerDevice>>, BuildError> {
     let cx = match status {
         Some(sink) => BuildContext::with_status(conn, sink),
         None => BuildContext::new(conn),
     };
+    build_devices_in(entries, &cx, warn_only, note)
+}
+
+/// [`build_devices`] with a prepared context (a device tree other than the system's, for
+/// `vrpn_server -devroot`).
+pub fn build_devices_in(
+    entries: &[DeviceEntry],
+    cx: &BuildContext<'_>,
+    warn_only: bool,
+    mut note: impl FnMut(BuildNote<'_>),
+) -> Result<Vec<Box<dyn ServerDevice>>, BuildError> {
     let mut devices: Vec<Box<dyn ServerDevice>> = Vec::new();
     for entry in entries {
-        match build_one(entry, &cx) {
+        match build_one(entry, cx) {
             Ok(built) => {
                 if let Some(first) = built.first() {
                     note(BuildNote::Opened {

@@ -7,6 +7,6 @@ pub mod limits;
 pub mod options;
 pub mod run;
 
-pub use factory::{build_devices, BuildError, BuildNote};
+pub use factory::{build_devices, build_devices_in, BuildError, BuildNote};
 pub use options::{parse_args, ServerCommand, ServerOptions, SleepPolicy};
 pub use run::ServerLoop;

@@ -59,6 +59,13 @@ pub struct ServerOptions {
     /// stamp its messages as a host whose clock is off would, to see clock synchronisation
     /// at work. See [`crate::time::shift_wall_clock`].
     pub clock_shift: Option<f64>,
+    /// Where USB HID and input devices are found (`-devroot DIR`: `DIR/sys` and `DIR/dev`,
+    /// hot-plug on `DIR/uevent`), for device simulators; the system's `/sys` and `/dev`
+    /// otherwise.
+    pub device_root: Option<String>,
+    /// List the HID and input devices plugged in, with the lines that would serve them, and
+    /// exit (`--list-devices`).
+    pub list_devices: bool,
 }
 
 impl Default for ServerOptions {
@@ -82,6 +89,8 @@ impl Default for ServerOptions {
             port: crate::wire::DEFAULT_PORT,
             callback_to_named_address: false,
             clock_shift: None,
+            device_root: None,
+            list_devices: false,
         }
     }
 }
@@ -100,7 +109,8 @@ pub enum ServerCommand {
 /// Usage text.
 pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q] [-millisleep N] \
 [-NIC ADDR] [-li FILE] [-lo FILE] [-flush] [-logdir DIR] [-forwardports LOW-HIGH]
-       [-callbacknamed] [-clockshift S] [PORT]
+       [-callbacknamed] [-clockshift S] [-devroot DIR] [PORT]
+       vrpn_server --list-devices [-devroot DIR]
        vrpn_server -h | --help | --version
   -f FILE         configuration file (default vrpn.cfg)
   -warn           skip bad configuration entries with a warning instead of stopping
@@ -124,6 +134,10 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q]
                   names, not the address it came from (multi-homed clients only)
   -clockshift S   stamp messages as if this host's clock were S seconds ahead (to
                   watch clients synchronise their clocks to it; not for production)
+  -devroot DIR    look for USB HID and input devices under DIR/sys and DIR/dev (device
+                  simulators; hot-plug events on the datagram socket DIR/uevent)
+  --list-devices  list the HID and input devices plugged in, each with the vrpn.cfg
+                  lines that would serve it, and exit
   PORT            UDP and TCP port to listen on (default 3883; 0 picks a free one)
   -h, --help      print this help
   --version       print the version";
@@ -162,6 +176,8 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
                     .ok_or_else(|| format!("-clockshift {v:?}: expected a number of seconds"))?;
                 o.clock_shift = Some(s);
             }
+            "-devroot" => o.device_root = Some(value("-devroot")?),
+            "--list-devices" => o.list_devices = true,
             "-li" => o.log_in = Some(value("-li")?),
             "-lo" => o.log_out = Some(value("-lo")?),
             "-NIC" => {

@@ -97,6 +97,9 @@ def test_bad_names_hosts_and_files():
         vrpn.TrackerRemote("@localhost")
     with pytest.raises(vrpn.DeviceNameError, match="expected DEVICE@HOST"):
         vrpn.ButtonRemote("Button0@localhost:99999")
+    # A name without "@HOST" says so, instead of failing to resolve "Tracker0" as a host.
+    with pytest.raises(vrpn.DeviceNameError, match='no .@.: .* "Tracker0@localhost"'):
+        vrpn.TrackerRemote("Tracker0")
     with pytest.raises(vrpn.ResolveError, match='cannot resolve host "no-such-host.invalid"'):
         vrpn.AnalogRemote("Analog0@no-such-host.invalid")
     with pytest.raises(vrpn.LogFileError, match="missing.vrpn"):

@@ -18,6 +18,7 @@ use crate::wire::payload::imager as codec;
 mod layout;
 mod pose;
 mod region;
+mod relay;
 mod remote;
 mod server;
 
@@ -28,6 +29,7 @@ pub use codec::{
 pub use layout::{BufferLayout, Pixel};
 pub use pose::{ImagerPose, ImagerPoseRemote, ImagerPoseReport, ImagerPoseServer};
 pub use region::ImagerRegion;
+pub use relay::ImagerRelay;
 pub use remote::{DiscardedFramesReport, FrameReport, ImagerDescription, ImagerRemote};
 pub use server::ImagerServer;
 

@@ -26,6 +26,9 @@ struct State {
     size: Cell<(i32, i32, i32)>,
     channels: RefCell<Vec<ChannelDescription>>,
     description_sent: Cell<bool>,
+    /// Whether a connecting or pinging client is sent the description (a relay waits until
+    /// it has the upstream's).
+    announce: Cell<bool>,
     /// Frames still allowed by the clients' throttle requests; -1: unlimited.
     frames_to_send: Cell<i32>,
     /// Frames dropped because of the throttle since the last one sent.
@@ -96,17 +99,20 @@ impl ImagerServer {
             size: Cell::new((cols, rows, depth)),
             channels: RefCell::new(Vec::with_capacity(MAX_CHANNELS)),
             description_sent: Cell::new(false),
+            announce: Cell::new(true),
             frames_to_send: Cell::new(-1),
             dropped: Cell::new(0),
             buf: RefCell::new(vec![0; MAX_PAYLOAD]),
         });
         let s = state.clone();
         conn.register_handler(base.ping, SenderFilter::Only(base.sender), move |m| {
-            let _ = s.send_description(m.connection());
+            if s.announce.get() {
+                let _ = s.send_description(m.connection());
+            }
         });
         let (s, weak) = (state.clone(), conn.downgrade());
         conn.on_event(ConnectionEvent::GotConnection, move || {
-            if let Some(c) = weak.upgrade() {
+            if let (true, Some(c)) = (s.announce.get(), weak.upgrade()) {
                 let _ = s.send_description(&c);
             }
         });
@@ -140,6 +146,46 @@ impl ImagerServer {
     /// The connection the server reports on.
     pub fn connection(&self) -> &Connection {
         &self.conn
+    }
+
+    /// The imager type ids on its connection.
+    pub fn ids(&self) -> ImagerIds {
+        self.state.ids
+    }
+
+    /// The sender and base type ids (text, ping, pong).
+    pub fn base_ids(&self) -> BaseIds {
+        self.base
+    }
+
+    /// Whether clients that connect or ping are sent the description (on by default). A
+    /// relay turns it off until it knows the image: a C++ client takes the first description
+    /// it hears as the image's size for good.
+    pub(crate) fn set_announce(&self, on: bool) {
+        self.state.announce.set(on);
+    }
+
+    /// Replaces the image's size and every channel at once, and sends the description (a
+    /// relay copying another imager's). At most 100 channels.
+    pub fn set_description(
+        &self,
+        cols: i32,
+        rows: i32,
+        depth: i32,
+        channels: &[ChannelDescription],
+    ) -> Result<(), Error> {
+        if channels.len() > MAX_CHANNELS {
+            return Err(Error::InvalidArgument(format!(
+                "an imager has at most {MAX_CHANNELS} channels"
+            )));
+        }
+        self.state.size.set((cols, rows, depth));
+        {
+            let mut c = self.state.channels.borrow_mut();
+            c.clear();
+            c.extend_from_slice(channels);
+        }
+        self.send_description()
     }
 
     /// Columns, rows and depth of the image.

@@ -10,10 +10,11 @@ use std::net::{Ipv4Addr, SocketAddrV4};
 
 use super::{ClockIds, Kind, Session};
 use crate::log::log_cookie_from_peer;
-use crate::proto::client::Failure;
 use crate::proto::clock::ClockSync;
 use crate::proto::endpoint::Phase;
-use crate::proto::{ConnectionEvent, Delivery, IoRequest, PeerId, Severity};
+use crate::proto::{
+    ConnectionEvent, Delivery, DropReason, IoRequest, NoticeKind, PeerId, Severity,
+};
 use crate::time::Now;
 use crate::wire::framing::StreamDecoder;
 use crate::wire::payload::clock;
@@ -66,7 +67,7 @@ impl Session {
             } else {
                 format!("{who}: {e}")
             };
-            self.drop_peer(now, id, text, Some(Failure::BadGreeting(e.to_string())));
+            self.drop_peer(now, id, DropReason::BadGreeting, text);
             return;
         }
         if cookie.minor_differs() {
@@ -76,7 +77,7 @@ impl Session {
                 cookie.version(),
                 Cookie::ours(0).version()
             );
-            self.notice(Severity::Info, t);
+            self.notice(Severity::Info, NoticeKind::MinorVersion { peer: who }, t);
         }
         // An incoming log carries the peer's cookie.
         let peer_cookie = log_cookie_from_peer(&cookie.to_bytes());

@@ -6,10 +6,9 @@ use std::time::Instant;
 
 use super::{Kind, Session};
 use crate::proto::buffers::DatagramInbox;
-use crate::proto::client::Failure;
 use crate::proto::endpoint::Phase;
 use crate::proto::server::{Decision, Ignored, RequestPolicy};
-use crate::proto::{IoRequest, PeerId, Severity};
+use crate::proto::{DropReason, IoRequest, NoticeKind, PeerId, Severity};
 use crate::time::Now;
 use crate::wire;
 
@@ -29,7 +28,11 @@ impl Session {
                 "refused TCP client {from}: {} clients already connected (limit)",
                 self.limits.max_connections
             );
-            self.notice(Severity::Warning, text);
+            self.notice(
+                Severity::Warning,
+                NoticeKind::ConnectionLimit { from },
+                text,
+            );
             return None;
         }
         let id = self.alloc_peer(true, from);
@@ -51,7 +54,11 @@ impl Session {
                 };
                 if first {
                     let text = format!("ignored a bad connection request from {from}: {e}");
-                    self.notice(Severity::Warning, text);
+                    self.notice(
+                        Severity::Warning,
+                        NoticeKind::BadConnectionRequest { from },
+                        text,
+                    );
                 }
                 self.request_summary(now.mono);
                 return;
@@ -109,7 +116,7 @@ impl Session {
             "dropped {who}, which had not greeted yet, to make room for a new client \
              (Limits::max_connections)"
         );
-        self.drop_peer(now, id, text, None);
+        self.drop_peer(now, id, DropReason::MadeRoom, text);
         true
     }
 
@@ -138,7 +145,7 @@ impl Session {
     pub(super) fn request_summary(&mut self, now: Instant) {
         if let Kind::Server(p) = &mut self.kind {
             if let Some(text) = p.summary(now) {
-                self.notice(Severity::Warning, text);
+                self.notice(Severity::Warning, NoticeKind::RequestsIgnored, text);
             }
         }
     }
@@ -154,7 +161,11 @@ impl Session {
                     p.log_in = Some(w);
                 }
             }
-            Err(e) => self.notice(Severity::Error, format!("cannot open incoming log: {e}")),
+            Err(e) => self.notice(
+                Severity::Error,
+                NoticeKind::LogFailed,
+                format!("cannot open incoming log: {e}"),
+            ),
         }
     }
 
@@ -183,10 +194,14 @@ impl Session {
         let Kind::Client(c) = &mut self.kind else {
             return;
         };
-        if c.failed(now.mono, Failure::Unreachable, &limits) {
+        if c.failed(now.mono, DropReason::Unreachable, &limits) {
             let server = c.server_text();
             self.notice(
                 Severity::Warning,
+                NoticeKind::PeerDropped {
+                    peer: server.clone(),
+                    reason: DropReason::Unreachable,
+                },
                 format!(
                     "no VRPN server at {server}: its UDP port answered 'port unreachable'; \
                      will keep retrying"
@@ -213,14 +228,14 @@ impl Session {
             return;
         };
         let who = p.label.clone();
-        let failure = if error.kind() == std::io::ErrorKind::ConnectionRefused {
-            Failure::Refused
+        let reason = if error.kind() == std::io::ErrorKind::ConnectionRefused {
+            DropReason::Refused
         } else {
-            Failure::Other(error.to_string())
+            DropReason::ConnectFailed(error.kind())
         };
         let text = match &self.kind {
-            Kind::Client(_) => match &failure {
-                Failure::Refused => format!(
+            Kind::Client(_) => match reason {
+                DropReason::Refused => format!(
                     "no VRPN server is listening on {who} (connection refused); will keep \
                      retrying every {:?}",
                     self.limits.retry_interval
@@ -232,7 +247,7 @@ impl Session {
                  the call-back; the client can use the tcp:// name form)"
             ),
         };
-        self.drop_peer(now, peer, text, Some(failure));
+        self.drop_peer(now, peer, reason, text);
     }
 
     /// Where the next bytes read from `peer`'s TCP socket go (empty: read nothing now).
@@ -270,14 +285,15 @@ impl Session {
         };
         let who = p.label.clone();
         let greeting = p.phase != Phase::Connected;
-        let (text, failure) = match error {
-            None => (
+        let (text, reason) = match error {
+            None if greeting => (
                 format!("{who} closed the connection"),
-                Failure::ClosedEarly("closed the connection".into()),
+                DropReason::ClosedBeforeGreeting,
             ),
+            None => (format!("{who} closed the connection"), DropReason::Closed),
             Some(e) => (
                 format!("connection to {who} failed: {e}"),
-                Failure::ClosedEarly(e.to_string()),
+                DropReason::ReadFailed(e.kind()),
             ),
         };
         let text = if greeting && matches!(self.kind, Kind::Client(_)) {
@@ -289,7 +305,7 @@ impl Session {
         } else {
             text
         };
-        self.drop_peer(now, peer, text, Some(failure));
+        self.drop_peer(now, peer, reason, text);
     }
 
     /// Sending to `peer` failed.
@@ -298,7 +314,7 @@ impl Session {
             return;
         };
         let text = format!("sending to {} failed: {error}", p.label);
-        self.drop_peer(now, peer, text, Some(Failure::Other(error.to_string())));
+        self.drop_peer(now, peer, DropReason::SendFailed(error.kind()), text);
     }
 
     /// Whether the session takes TCP bytes from `peer` now.

@@ -2,8 +2,9 @@
 //! what it packs, in C++'s `.vrpn` format, buffered and written a bounded amount per pass.
 
 use super::{Kind, PeerLogFactory, Session};
+use crate::log::LogError;
 use crate::proto::endpoint::LogSink;
-use crate::proto::Severity;
+use crate::proto::{NoticeKind, Severity};
 use crate::time::{Now, TimeVal};
 use crate::wire::system;
 
@@ -36,7 +37,11 @@ impl Session {
     pub(crate) fn log_error(&mut self, e: String) {
         if !self.logs.failed {
             self.logs.failed = true;
-            self.notice(Severity::Error, format!("logging failed: {e}"));
+            self.notice(
+                Severity::Error,
+                NoticeKind::LogFailed,
+                format!("logging failed: {e}"),
+            );
         }
     }
 
@@ -91,15 +96,15 @@ impl Session {
     }
 
     /// Writes every buffered log byte.
-    pub fn flush_logs_all(&mut self) -> Result<(), String> {
+    pub fn flush_logs_all(&mut self) -> Result<(), LogError> {
         for w in self.log_sinks() {
-            w.flush_all().map_err(|e| e.to_string())?;
+            w.flush_all()?;
         }
         Ok(())
     }
 
     /// Ends logging: a DISCONNECT entry closes the outgoing log (as C++ at shutdown).
-    pub fn close_logs(&mut self, now: Now) -> Result<(), String> {
+    pub fn close_logs(&mut self, now: Now) -> Result<(), LogError> {
         let client = matches!(self.kind, Kind::Client(_));
         if self.logs.outgoing.is_some() && !client || self.connected > 0 {
             self.log_outgoing(system::DISCONNECT, 0, now.wall, &[]);

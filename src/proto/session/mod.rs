@@ -44,8 +44,11 @@ use super::client::ClientSchedule;
 use super::endpoint::{Endpoint, LogSink, Phase};
 use super::names::Names;
 use super::server::RequestPolicy;
-use super::{ConnectionState, Delivery, IoRequest, Limits, Notice, PeerId, Severity};
+use super::{
+    ConnectionState, Delivery, DropReason, IoRequest, Limits, Notice, NoticeKind, PeerId, Severity,
+};
 use crate::log::replay::Replay;
+use crate::log::LogError;
 use crate::time::Now;
 use crate::wire::{self};
 
@@ -62,7 +65,7 @@ pub(crate) enum Kind {
 }
 
 /// Makes the incoming log of the N-th peer a server accepts (`vrpn_server -li`).
-pub type PeerLogFactory = Box<dyn FnMut(u32) -> Result<LogSink, String>>;
+pub type PeerLogFactory = Box<dyn FnMut(u32) -> Result<LogSink, LogError>>;
 
 /// Logs a session writes (C++ `.vrpn` format).
 #[derive(Default)]
@@ -130,9 +133,9 @@ pub struct Session {
     /// Input arrived (or a peer's budget was renewed) since a poll last found nothing to
     /// deliver: lets [`poll_delivery`](Session::poll_delivery) answer "nothing" without a walk.
     pub(crate) input_pending: bool,
-    /// Why the peer whose message is being handled must be dropped: set by the (rare) refusals
-    /// of message handling, taken at once by the receive walk.
-    pub(crate) refusal: Option<String>,
+    /// Why the peer whose message is being handled must be dropped (and the words for it):
+    /// set by the (rare) refusals of message handling, taken at once by the receive walk.
+    pub(crate) refusal: Option<(DropReason, String)>,
     /// [`poll_timeout`](Session::poll_timeout)'s answer while nothing that sets a deadline has
     /// changed (`None`: work it out again). Every pass asks; few passes change it.
     pub(crate) timeout_cache: std::cell::Cell<Option<Option<Instant>>>,
@@ -250,6 +253,10 @@ impl Session {
         if let Kind::Client(c) = &self.kind {
             ep.seq_tcp = c.seq.0;
             ep.seq_udp = c.seq.1;
+            // A client's one peer is its server, named as the user named it: on the default
+            // path its TCP connection comes from the server's call-back port, which would
+            // only confuse a reader.
+            ep.label = c.server_text();
         }
         self.peers[slot] = Some(ep);
         id
@@ -309,9 +316,9 @@ impl Session {
 
     // ------------------------------------------------------------------ notices and state
 
-    pub(crate) fn notice(&mut self, severity: Severity, text: String) {
+    pub(crate) fn notice(&mut self, severity: Severity, kind: NoticeKind, text: String) {
         self.queue
-            .push_back(Delivery::Notice(Notice { severity, text }));
+            .push_back(Delivery::Notice(Notice::new(severity, kind, text)));
     }
 
     /// What the connection is doing now.
@@ -353,12 +360,14 @@ impl Session {
     }
 
     /// The sender names connected peers offer: those in their own tables, not the echoes of
-    /// names this side described to them, nor `VRPN Control` (sender 0 of every connection).
+    /// names this side described to them, nor the protocol's own senders (`VRPN Control`,
+    /// sender 0 of every connection, and the clock synchronisation's): exactly the names
+    /// [`Delivery::PeerSender`] reported.
     pub fn peer_sender_names(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
         for p in self.peers.iter().flatten() {
             for local in p.senders.locals() {
-                if local == 0 || !p.offered.contains(local) {
+                if !p.offered.contains(local) {
                     continue;
                 }
                 if let Some(n) = self.names.senders.name(local) {

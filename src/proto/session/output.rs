@@ -6,9 +6,8 @@ use std::time::Instant;
 
 use super::{Kind, Session};
 use crate::proto::buffers::DatagramQueue;
-use crate::proto::client::Failure;
 use crate::proto::endpoint::Phase;
-use crate::proto::{IoRequest, PeerId, Severity};
+use crate::proto::{DropReason, IoRequest, NoticeKind, PeerId, Severity};
 use crate::time::Now;
 
 impl Session {
@@ -140,10 +139,10 @@ impl Session {
             }
             let (id, who, phase) = (p.id, p.label.clone(), p.phase);
             let is_client = matches!(self.kind, Kind::Client(_));
-            let (text, failure) = match phase {
+            let (text, reason) = match phase {
                 Phase::Connecting => (
                     format!("TCP connection to {who} timed out"),
-                    Failure::ConnectTimeout,
+                    DropReason::ConnectTimeout,
                 ),
                 _ if is_client => (
                     format!(
@@ -152,7 +151,7 @@ impl Session {
                          retrying every {:?})",
                         self.limits.handshake_timeout, self.limits.retry_interval
                     ),
-                    Failure::Silent,
+                    DropReason::NoGreeting,
                 ),
                 _ => (
                     format!(
@@ -160,10 +159,10 @@ impl Session {
                          (Limits::handshake_timeout)",
                         self.limits.handshake_timeout
                     ),
-                    Failure::Silent,
+                    DropReason::NoGreeting,
                 ),
             };
-            self.drop_peer(now, id, text, Some(failure));
+            self.drop_peer(now, id, reason, text);
         }
         self.send_clock_queries(now);
         let limits = self.limits;
@@ -172,7 +171,7 @@ impl Session {
             Kind::Client(c) if idle => {
                 let explain = c.no_answer_due(now.mono, &limits).then(|| {
                     let listen = c.listen.map_or_else(|| "?".to_string(), |l| l.to_string());
-                    format!(
+                    let text = format!(
                         "no answer from the VRPN server at {host}:{port} after {wait:?}: \
                          either no server runs there, or it cannot connect back to this \
                          machine at {listen} (a firewall or NAT). If the server runs, use \
@@ -180,11 +179,12 @@ impl Session {
                         host = c.host,
                         port = c.server.port(),
                         wait = limits.no_answer_warning
-                    )
+                    );
+                    (c.server_text(), text)
                 });
                 let due = now.mono >= c.next_attempt;
-                if let Some(text) = explain {
-                    self.notice(Severity::Warning, text);
+                if let Some((server, text)) = explain {
+                    self.notice(Severity::Warning, NoticeKind::NoAnswer { server }, text);
                 }
                 if due {
                     self.attempt(now);
@@ -225,9 +225,15 @@ impl Session {
         let Kind::Client(c) = &mut self.kind else {
             return;
         };
-        if c.failed(now.mono, Failure::Other(error.to_string()), &limits) {
+        let reason = DropReason::RequestFailed(error.kind());
+        if c.failed(now.mono, reason, &limits) {
             let text = format!("cannot send a connection request to {to}: {error}");
-            self.notice(Severity::Warning, text);
+            let peer = c.server_text();
+            self.notice(
+                Severity::Warning,
+                NoticeKind::PeerDropped { peer, reason },
+                text,
+            );
         }
     }
 

@@ -2,10 +2,11 @@
 //! translation, fairness between peers, and log replay through the same path.
 
 use super::{Kind, Session, RESERVED_FOR_LOCAL};
-use crate::proto::client::Failure;
 use crate::proto::endpoint::{ClockPass, Phase, RemoteNames};
 use crate::proto::names::NameLimit;
-use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, Severity};
+use crate::proto::{
+    ConnectionEvent, Delivery, DropReason, IoRequest, NameKind, Notice, NoticeKind, Severity,
+};
 use crate::time::TimeSource;
 use crate::wire::payload::clock::{Query, Reply};
 use crate::wire::{self, system, MAX_IDS};
@@ -194,9 +195,14 @@ impl Session {
     /// Drops the peer in `slot` for breaking the protocol.
     #[cold]
     #[inline(never)]
-    fn drop_for(&mut self, now: &dyn TimeSource, slot: usize, reason: String) -> Option<Delivery> {
+    fn drop_for(
+        &mut self,
+        now: &dyn TimeSource,
+        slot: usize,
+        (reason, text): (DropReason, String),
+    ) -> Option<Delivery> {
         let id = self.peers[slot].as_ref()?.id;
-        self.drop_peer(now.now(), id, reason, None);
+        self.drop_peer(now.now(), id, reason, text);
         self.queue.pop_front()
     }
 
@@ -210,8 +216,8 @@ impl Session {
         e: wire::WireError,
     ) -> Option<Delivery> {
         let p = self.peers[slot].as_ref()?;
-        let (id, reason) = (p.id, format!("malformed message from {}: {e}", p.label));
-        self.drop_peer(now.now(), id, reason, Some(Failure::Other(e.to_string())));
+        let (id, text) = (p.id, format!("malformed message from {}: {e}", p.label));
+        self.drop_peer(now.now(), id, DropReason::Malformed, text);
         self.queue.pop_front()
     }
 
@@ -231,7 +237,11 @@ impl Session {
                 "ignoring UDP datagrams sent to {}'s channel from another address ({source})",
                 p.label
             );
-            self.notice(Severity::Warning, text);
+            let kind = NoticeKind::ForeignDatagrams {
+                peer: p.label.clone(),
+                from: source,
+            };
+            self.notice(Severity::Warning, kind, text);
             return Some(self.queue.pop_front());
         }
         None
@@ -257,7 +267,8 @@ impl Session {
         let inbox = p.udp_rx.as_mut()?;
         inbox.skip_datagram();
         let t = format!("discarded a malformed UDP datagram from {}: {e}", p.label);
-        self.notice(Severity::Warning, t);
+        let peer = p.label.clone();
+        self.notice(Severity::Warning, NoticeKind::MalformedDatagram { peer }, t);
         self.queue.pop_front()
     }
 
@@ -281,10 +292,11 @@ impl Session {
                         "replay stopped at damaged data (every whole message before it was \
                          played): {e}"
                     );
-                    return Some(Delivery::Notice(Notice {
-                        severity: Severity::Error,
+                    return Some(Delivery::Notice(Notice::new(
+                        Severity::Error,
+                        NoticeKind::ReplayDamaged,
                         text,
-                    }));
+                    )));
                 }
                 return None;
             };
@@ -311,8 +323,15 @@ impl Session {
             if d.is_some() {
                 return d;
             }
-            if let Some(text) = self.refusal.take() {
-                self.notice(Severity::Warning, text);
+            if let Some((reason, text)) = self.refusal.take() {
+                // A log cannot be dropped: say what was wrong and play on.
+                let peer = self.peers[0].as_ref().map(|p| p.label.clone());
+                let peer = peer.unwrap_or_default();
+                self.notice(
+                    Severity::Warning,
+                    NoticeKind::PeerDropped { peer, reason },
+                    text,
+                );
             }
             if !self.to_describe.is_empty() {
                 self.describe_new_names(now.now());
@@ -495,7 +514,7 @@ impl Session {
     /// A sender or type description: learn the name, map the peer's id to ours.
     fn handle_description(&mut self, slot: usize, h: wire::Header, len: usize) -> Option<Delivery> {
         let is_sender = h.type_id == system::SENDER_DESCRIPTION;
-        let kind = if is_sender { "sender" } else { "type" };
+        let kind = NameKind::of(is_sender);
         let Session {
             peers,
             names,
@@ -514,6 +533,7 @@ impl Session {
         if !RemoteNames::valid_id(h.sender) {
             return refuse(
                 refusal,
+                DropReason::BadDescription,
                 format!(
                     "{} described id {} outside VRPN's 0..{MAX_IDS} range",
                     p.label, h.sender
@@ -522,7 +542,10 @@ impl Session {
         }
         let name = match system::decode_description_bytes(&scratch[..len]) {
             Ok(n) => n,
-            Err(e) => return refuse(refusal, format!("bad description from {}: {e}", p.label)),
+            Err(e) => {
+                let text = format!("bad description from {}: {e}", p.label);
+                return refuse(refusal, DropReason::BadDescription, text);
+            }
         };
         if !is_sender
             && (name == wire::payload::clock::QUERY.as_bytes()
@@ -548,11 +571,13 @@ impl Session {
         if rebinds {
             remote.described += 1;
             if remote.described > limits.max_names_per_peer {
+                let limit = limits.max_names_per_peer;
                 return refuse(
                     refusal,
+                    DropReason::TooManyNames { kind, limit },
                     format!(
-                        "{} described more than {} {kind} names (Limits::max_names_per_peer)",
-                        p.label, limits.max_names_per_peer
+                        "{} described more than {limit} {kind} names (Limits::max_names_per_peer)",
+                        p.label
                     ),
                 );
             }
@@ -583,16 +608,18 @@ impl Session {
                         p.label,
                         names_refused
                     );
-                    queue.push_back(Delivery::Notice(Notice {
-                        severity: Severity::Warning,
+                    queue.push_back(Delivery::Notice(Notice::new(
+                        Severity::Warning,
+                        NoticeKind::NameTableFull { kind },
                         text,
-                    }));
+                    )));
                 }
                 return None;
             }
             Err(e) => {
                 return refuse(
                     refusal,
+                    DropReason::BadDescription,
                     format!("{} described a name we cannot hold: {e}", p.label),
                 )
             }
@@ -600,10 +627,10 @@ impl Session {
         remote.bind(h.sender, local);
         if is_sender {
             // A sender is one the peer offers if it is in the peer's own table (described
-            // before its first type) or a name this side never registered. The clock-sync
-            // sender is the protocol's own, not a device.
+            // before its first type) or a name this side never registered. The control and
+            // clock-sync senders are the protocol's own, not devices.
             let own = !p.senders_complete || !names.senders.is_registered(local);
-            let device = name != crate::wire::payload::clock::SENDER.as_bytes();
+            let device = !crate::proto::names::is_protocol_sender(name);
             if own && device && p.offered.insert(local) {
                 return Some(Delivery::PeerSender(local));
             }
@@ -657,8 +684,12 @@ impl Session {
 /// to deliver.
 #[cold]
 #[inline(never)]
-fn refuse(refusal: &mut Option<String>, reason: String) -> Option<Delivery> {
-    *refusal = Some(reason);
+fn refuse(
+    refusal: &mut Option<(DropReason, String)>,
+    reason: DropReason,
+    text: String,
+) -> Option<Delivery> {
+    *refusal = Some((reason, text));
     None
 }
 
@@ -666,13 +697,14 @@ fn refuse(refusal: &mut Option<String>, reason: String) -> Option<Delivery> {
 #[cold]
 #[inline(never)]
 fn oversized(
-    refusal: &mut Option<String>,
+    refusal: &mut Option<(DropReason, String)>,
     label: &str,
     len: usize,
     limit: usize,
 ) -> Option<Delivery> {
     refuse(
         refusal,
+        DropReason::Oversized { len, limit },
         format!(
             "{label} sent a {len}-byte message; the limit is {limit} bytes \
              (Limits::max_message_payload)"

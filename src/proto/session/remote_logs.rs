@@ -12,7 +12,7 @@
 use super::{Kind, Session};
 use crate::log::folder::{LogFolder, Refusal};
 use crate::proto::endpoint::LogSink;
-use crate::proto::{PeerId, Severity};
+use crate::proto::{DropReason, NoticeKind, PeerId, Severity};
 use crate::time::{Now, TimeVal};
 use crate::wire::{class, system};
 
@@ -117,7 +117,8 @@ impl Session {
                  {outgoing:?}); remote logging requests are refused: log locally with -li/-lo, \
                  or name a folder for them (vrpn_server -logdir DIR)"
             );
-            self.notice(Severity::Warning, text);
+            let kind = NoticeKind::RemoteLogRefused { peer: label };
+            self.notice(Severity::Warning, kind, text);
             return;
         };
         let open = |name: &str| -> Result<Option<LogSink>, Refusal> {
@@ -135,13 +136,19 @@ impl Session {
             Err(refusal) => {
                 self.notice(
                     Severity::Warning,
+                    NoticeKind::RemoteLogRefused {
+                        peer: label.clone(),
+                    },
                     format!(
                         "{label} asked to be logged, which this server cannot do: {refusal}; \
                          connection closed (how a VRPN client learns that remote logging \
                          failed)"
                     ),
                 );
-                self.refusal = Some(format!("{label}: remote logging refused"));
+                self.refusal = Some((
+                    DropReason::RemoteLogRefused,
+                    format!("{label}: remote logging refused"),
+                ));
                 return;
             }
         };
@@ -189,7 +196,11 @@ impl Session {
         if let Some(p) = self.peers[slot].as_mut() {
             p.requested_logs = Some(Box::new(requested));
         }
-        self.notice(Severity::Info, text);
+        self.notice(
+            Severity::Info,
+            NoticeKind::RemoteLogOpened { peer: label },
+            text,
+        );
     }
 
     /// Writes a message packed for peers into the outgoing logs peers asked for.

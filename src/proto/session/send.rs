@@ -2,12 +2,13 @@
 //! its channel and shedding policy, and dropping peers.
 
 use super::{Kind, Session};
-use crate::proto::client::Failure;
 use crate::proto::endpoint::{Channel, Phase};
 use crate::proto::names::NameLimit;
 use std::collections::VecDeque;
 
-use crate::proto::{ConnectionEvent, Delivery, IoRequest, Notice, PeerId, Severity};
+use crate::proto::{
+    ConnectionEvent, Delivery, DropReason, IoRequest, Notice, NoticeKind, PeerId, Severity,
+};
 use crate::time::{Now, TimeVal};
 use crate::wire::{class, system};
 
@@ -148,8 +149,8 @@ impl Session {
         self.drop_peer(
             now,
             id,
+            DropReason::NotReading { limit },
             format!("{who} is not reading: more than {limit} bytes of reliable output pending"),
-            None,
         );
     }
 
@@ -165,14 +166,9 @@ impl Session {
     // ------------------------------------------------------------------ drops
 
     /// Forgets a peer: releases the names it held, asks the shell to close its sockets, fires
-    /// the dropped events if it had connected, and (client) schedules the next attempt.
-    pub(crate) fn drop_peer(
-        &mut self,
-        now: Now,
-        id: PeerId,
-        reason: String,
-        failure: Option<Failure>,
-    ) {
+    /// the dropped events if it had connected, and (client) schedules the next attempt. The
+    /// notice (when one is due) says `text` and carries `reason`.
+    pub(crate) fn drop_peer(&mut self, now: Now, id: PeerId, reason: DropReason, text: String) {
         self.timeouts_changed();
         let Some(mut p) = self
             .peers
@@ -195,10 +191,10 @@ impl Session {
             if was_connected {
                 c.dropped(now.mono, p.connected_at.unwrap_or(now.mono), &limits);
             } else {
-                let failure = failure.unwrap_or(Failure::Other(reason.clone()));
-                explain = c.failed(now.mono, failure, &limits);
+                explain = c.failed(now.mono, reason, &limits);
             }
         }
+        let peer = std::mem::take(&mut p.label);
         drop(p);
         if is_client && was_connected {
             self.log_outgoing(system::DISCONNECT, 0, now.wall, &[]);
@@ -210,11 +206,11 @@ impl Session {
         };
         if explain {
             let text = if is_client && was_connected {
-                format!("{reason}; reconnecting")
+                format!("{text}; reconnecting")
             } else {
-                reason
+                text
             };
-            self.notice(severity, text);
+            self.notice(severity, NoticeKind::PeerDropped { peer, reason }, text);
         }
         if was_connected {
             self.connected -= 1;
@@ -233,11 +229,14 @@ impl Session {
 #[cold]
 #[inline(never)]
 fn falling_behind(queue: &mut VecDeque<Delivery>, who: &str, pending: usize) {
-    queue.push_back(Delivery::Notice(Notice {
-        severity: Severity::Warning,
-        text: format!(
+    queue.push_back(Delivery::Notice(Notice::new(
+        Severity::Warning,
+        NoticeKind::FallingBehind {
+            peer: who.to_string(),
+        },
+        format!(
             "{who} is falling behind ({pending} bytes of output pending): dropping its \
              unreliable messages while the backlog exceeds half of Limits::max_pending_output"
         ),
-    }));
+    )));
 }
