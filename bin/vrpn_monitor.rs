@@ -50,14 +50,6 @@ usage error.";
 /// Snapshots per second sent to the pages.
 const SNAPSHOTS_PER_SEC: u32 = 30;
 
-/// Senders a server announces that are not devices (see vrpn_print_devices --list).
-const HIDDEN: [&str; 4] = [
-    "VRPN Control",
-    "vrpn_Forwarder_Brain",
-    PROGRAM,
-    vrpn::wire::payload::clock::SENDER,
-];
-
 struct Options {
     http: SocketAddr,
     allow_remote: bool,
@@ -145,8 +137,8 @@ impl Devices {
             return;
         }
         let location = location.clone();
-        for s in conn.peer_senders() {
-            if HIDDEN.contains(&s.as_str()) || self.devices.iter().any(|d| d.name() == s) {
+        for s in conn.peer_devices() {
+            if s == PROGRAM || self.devices.iter().any(|d| d.name() == s) {
                 continue;
             }
             if let Err(e) = self.add(&format!("{s}@{location}")) {

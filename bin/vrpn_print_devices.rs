@@ -263,16 +263,9 @@ fn list(location: &str) -> u8 {
         }
         // Descriptions arrive right after the cookie; give late ones a moment.
         if connected_at.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
-            // Not devices: the system sender, C++'s forwarder, our own name echoed back, and
-            // the clock-sync sender (ours, or echoed by a C++ server that learned it).
-            let hidden = [
-                "VRPN Control",
-                "vrpn_Forwarder_Brain",
-                PROGRAM,
-                vrpn::wire::payload::clock::SENDER,
-            ];
-            for s in conn.peer_senders() {
-                if !hidden.contains(&s.as_str()) {
+            // Not devices: the server's services and our own name echoed back.
+            for s in conn.peer_devices() {
+                if s != PROGRAM {
                     outln!("{s}");
                 }
             }

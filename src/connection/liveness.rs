@@ -142,6 +142,15 @@ impl Connection {
         next
     }
 
+    /// The devices the connected peers offer: [`peer_senders`](Self::peer_senders) without the
+    /// senders a server announces for its own services rather than for a device (the
+    /// remote-forwarding control every C++ `vrpn_server` runs, and clock synchronisation).
+    pub fn peer_devices(&self) -> Vec<String> {
+        let mut names = self.peer_senders();
+        names.retain(|n| !is_service_sender(n));
+        names
+    }
+
     /// A server finished describing its devices: say so at once if a remote asks for a device
     /// the server does not offer (a typo in the name would otherwise mean silence).
     pub(super) fn check_wanted_devices(&self) {
@@ -149,7 +158,7 @@ impl Connection {
             return;
         }
         // The control sender is the protocol's own; `peer_senders` never lists it.
-        let offered = self.peer_senders();
+        let offered = self.peer_devices();
         let peer = self
             .peers()
             .first()
@@ -176,4 +185,11 @@ impl Connection {
             self.dispatch_notice(Notice::new(Severity::Warning, kind, text));
         }
     }
+}
+
+/// Senders that name a server's service, not a device: listing them as devices would mislead.
+pub fn is_service_sender(name: &str) -> bool {
+    name == "VRPN Control"
+        || name == crate::wire::payload::forwarder::SENDER
+        || name == crate::wire::payload::clock::SENDER
 }

@@ -18,6 +18,7 @@
 
 pub mod dispatch;
 mod liveness;
+pub use liveness::is_service_sender;
 mod logs;
 pub mod names;
 mod open;
