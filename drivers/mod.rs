@@ -12,12 +12,14 @@ use crate::driver::Driver;
 
 pub mod cerealbox;
 pub mod controls;
+pub mod crossbow;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
 pub mod glove5dt_usb;
+pub mod gps;
 #[cfg(test)]
 mod hid_config_tests;
 #[cfg(test)]
@@ -31,6 +33,7 @@ pub mod imager_stream_buffer;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod polaris;
 pub mod spacemouse;
 pub mod threespace;
 pub mod xkeys;
@@ -66,12 +69,15 @@ pub static REGISTRY: &[&Driver] = &[
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
+    &crossbow::DRIVER,
     &dyna::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
+    &gps::DRIVER,
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &polaris::DRIVER,
     &threespace::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,

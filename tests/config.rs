@@ -221,6 +221,7 @@ fn sample_config_commented_examples_parse() {
                 || ["absolute", "vel_scale", "Wand", "Stylus", "end"]
                     .iter()
                     .any(|k| rest.starts_with(k))
+                || rest.ends_with(".rom")
             {
                 uncommented.push_str(rest);
                 uncommented.push('\n');
@@ -250,6 +251,9 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_NDI_Polaris",
+            "vrpn_Tracker_Crossbow",
+            "vrpn_Tracker_GPS",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",

@@ -7,8 +7,14 @@ use std::cell::Cell;
 use std::rc::Rc;
 use std::time::Duration;
 
+use vrpn::drivers::crossbow::sim::{CrossbowSim, SimConfig as CrossbowSimConfig};
+use vrpn::drivers::crossbow::Crossbow;
+use vrpn::drivers::gps::sim::{GpsSim, SimConfig as GpsSimConfig};
+use vrpn::drivers::gps::Gps;
 use vrpn::drivers::liberty::sim::{Kind, LibertySim, SimConfig as LibertySimConfig};
 use vrpn::drivers::liberty::Liberty;
+use vrpn::drivers::polaris::sim::{PolarisSim, SimConfig as PolarisSimConfig};
+use vrpn::drivers::polaris::Polaris;
 use vrpn::drivers::threespace::record::Model;
 use vrpn::drivers::threespace::sim::{SimConfig as ThreeSpaceSimConfig, ThreeSpaceSim};
 use vrpn::drivers::threespace::ThreeSpace;
@@ -97,6 +103,80 @@ fn liberty_streams_without_allocating() {
     let mut line = VirtualLine::new(Counted(driver), LibertySim::new(sim), start(), 4);
     let (allocations, reports) = stream(&mut line, &reports, b"LYx\x02PA ");
     assert!(reports >= 590, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 20);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn polaris_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let dir = std::env::temp_dir().join(format!("vrpn-polaris-alloc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (a, b) = (dir.join("a.rom"), dir.join("b.rom"));
+    std::fs::write(&a, [7u8; 200]).unwrap();
+    std::fs::write(&b, [9u8; 64]).unwrap();
+    let text = format!(
+        "vrpn_Tracker_NDI_Polaris P /dev/ttyUSB0 2\n{}\n{}\n",
+        a.display(),
+        b.display()
+    );
+    let cfg: Polaris = parse_one(&text);
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let tracker = TrackerRemote::on_connection("P", &conn).unwrap();
+    let reports = counter();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let mut sim = PolarisSimConfig::new();
+    sim.missing_every = Some(5);
+    let mut line = VirtualLine::new(Counted(driver), PolarisSim::new(sim), start(), 5);
+    let (allocations, reports) = stream(&mut line, &reports, b"01+0\r\x00");
+    // 60 frames a second, two tools, one frame in five of each missing; a reply the noise
+    // breaks costs the wait for the next TX.
+    assert!(reports >= 350, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 20);
+    assert_eq!(allocations, 0, "allocations while streaming");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn crossbow_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: Crossbow = parse_one("vrpn_Tracker_Crossbow X /dev/ttyS0 38400 2.0 100\n");
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let tracker = TrackerRemote::on_connection("X", &conn).unwrap();
+    let reports = counter();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let r = reports.clone();
+    tracker.on_acceleration(move |_| r.set(r.get() + 1));
+    let r = reports.clone();
+    tracker.on_velocity(move |_| r.set(r.get() + 1));
+    let sim = CrossbowSim::new(CrossbowSimConfig::new(cfg.baud));
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
+    let (allocations, reports) = stream(&mut line, &reports, &[0xAA, 0x55, 0x01]);
+    assert!(reports >= 3 * 500, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 10);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn gps_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: Gps = parse_one("vrpn_Tracker_GPS G /dev/ttyS0 38400\n");
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let tracker = TrackerRemote::on_connection("G", &conn).unwrap();
+    let reports = counter();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let mut sim = GpsSimConfig::new(cfg.baud);
+    sim.no_fix_every = Some(4);
+    let mut line = VirtualLine::new(Counted(driver), GpsSim::new(sim), start(), 7);
+    let (allocations, reports) = stream(&mut line, &reports, b"$GPGGA,1*77\r\n$x");
+    // Ten epochs a second, three in four with a fix.
+    assert!(reports >= 30, "{reports} reports");
     assert!(line.driver.0.stats().skipped_bytes >= 20);
     assert_eq!(allocations, 0, "allocations while streaming");
 }
