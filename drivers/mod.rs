@@ -30,9 +30,11 @@ pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
+pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod orb;
 pub mod polaris;
 pub mod spacemouse;
 pub mod threespace;
@@ -74,9 +76,11 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &inertiamouse::DRIVER,
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &orb::DRIVER,
     &polaris::DRIVER,
     &threespace::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).

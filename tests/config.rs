@@ -254,6 +254,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_NDI_Polaris",
             "vrpn_Tracker_Crossbow",
             "vrpn_Tracker_GPS",
+            "vrpn_inertiamouse",
+            "vrpn_GlobalHapticsOrb",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",

@@ -1,7 +1,7 @@
-//! The serial trackers of the 3SPACE family, the Liberty, the Polaris, the Crossbow, the GPS
-//! and the YEI 3-Space report without allocating: a counting global allocator around every
-//! driver call while the simulators stream through them, with reads split at random points
-//! and damage on the line.
+//! The serial trackers of the 3SPACE family, the Liberty, the Polaris, the Crossbow and the
+//! GPS, the inertia mouse and the Global Haptics Orb report without allocating: a counting global allocator around
+//! every driver call while the simulators stream through them, with reads split at random
+//! points and damage on the line.
 
 use std::cell::Cell;
 use std::rc::Rc;
@@ -11,8 +11,12 @@ use vrpn::drivers::crossbow::sim::{CrossbowSim, SimConfig as CrossbowSimConfig};
 use vrpn::drivers::crossbow::Crossbow;
 use vrpn::drivers::gps::sim::{GpsSim, SimConfig as GpsSimConfig};
 use vrpn::drivers::gps::Gps;
+use vrpn::drivers::inertiamouse::sim::{InertiaSim, SimConfig as InertiaSimConfig};
+use vrpn::drivers::inertiamouse::InertiaMouse;
 use vrpn::drivers::liberty::sim::{Kind, LibertySim, SimConfig as LibertySimConfig};
 use vrpn::drivers::liberty::Liberty;
+use vrpn::drivers::orb::sim::{OrbSim, SimConfig as OrbSimConfig};
+use vrpn::drivers::orb::Orb;
 use vrpn::drivers::polaris::sim::{PolarisSim, SimConfig as PolarisSimConfig};
 use vrpn::drivers::polaris::Polaris;
 use vrpn::drivers::threespace::record::Model;
@@ -21,7 +25,7 @@ use vrpn::drivers::threespace::ThreeSpace;
 use vrpn::serial::SerialDriver;
 use vrpn::server::config::parse_one;
 use vrpn::sim::{DeviceModel, VirtualLine};
-use vrpn::{ButtonRemote, Connection, TrackerRemote};
+use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote, TrackerRemote};
 
 #[path = "common/counted_driver.rs"]
 mod counted_driver;
@@ -178,5 +182,52 @@ fn gps_streams_without_allocating() {
     // Ten epochs a second, three in four with a fix.
     assert!(reports >= 30, "{reports} reports");
     assert!(line.driver.0.stats().skipped_bytes >= 20);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn inertia_mouse_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: InertiaMouse = parse_one("vrpn_inertiamouse M /dev/ttyS0 115200\n");
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let reports = counter();
+    let analog = AnalogRemote::on_connection("M", &conn).unwrap();
+    let r = reports.clone();
+    analog.on_report(move |_| r.set(r.get() + 1));
+    let buttons = ButtonRemote::on_connection("M", &conn).unwrap();
+    let r = reports.clone();
+    buttons.on_change(move |_| r.set(r.get() + 1));
+    let sim = InertiaSim::new(InertiaSimConfig::new(cfg.baud));
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 8);
+    let (allocations, reports) = stream(&mut line, &reports, b"Dx\nBB");
+    // A record every 10 ms; most change a channel.
+    assert!(reports >= 300, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 10);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn orb_reports_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: Orb = parse_one("vrpn_GlobalHapticsOrb O /dev/ttyS0 19200\n");
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let reports = counter();
+    let analog = AnalogRemote::on_connection("O", &conn).unwrap();
+    let r = reports.clone();
+    analog.on_report(move |_| r.set(r.get() + 1));
+    let buttons = ButtonRemote::on_connection("O", &conn).unwrap();
+    let r = reports.clone();
+    buttons.on_change(move |_| r.set(r.get() + 1));
+    let dials = DialRemote::on_connection("O", &conn).unwrap();
+    let r = reports.clone();
+    dials.on_update(move |_| r.set(r.get() + 1));
+    let sim = OrbSim::new(OrbSimConfig::new(cfg.baud));
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 9);
+    let (allocations, reports) = stream(&mut line, &reports, &[0x41, 0x7F]);
+    // An event every 5 ms.
+    assert!(reports >= 900, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 10);
     assert_eq!(allocations, 0, "allocations while streaming");
 }
