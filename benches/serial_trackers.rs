@@ -41,7 +41,7 @@ fn measure<M: DeviceModel + 'static>(
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(POSES);
-    let path = tty_path(label);
+    let path = tty_path(label.split_whitespace().next().unwrap_or("tracker"));
     let sent: Log = Arc::default();
     let s = sent.clone();
     let mut seen = 0usize;

@@ -130,10 +130,9 @@ impl InertiaSim {
             self.reported = self.state.channels;
             self.sent.push(Sent::Analog(self.reported, first));
         }
-        for i in 0..2 {
-            if before[i] != self.state.buttons[i] {
-                self.sent
-                    .push(Sent::Button(i, self.state.buttons[i], first));
+        for (i, (was, is)) in before.iter().zip(self.state.buttons).enumerate() {
+            if *was != is {
+                self.sent.push(Sent::Button(i, is, first));
             }
         }
     }
