@@ -202,7 +202,11 @@ fn run(o: Options) -> u8 {
     let web = http::spawn(server, feed.clone(), stop.clone());
     let interval = Duration::from_secs(1) / SNAPSHOTS_PER_SEC;
     let start = Instant::now();
-    let end = o.seconds.map(|s| start + Duration::from_secs_f64(s));
+    // More seconds than a schedule holds (10^9) is as good as forever.
+    let end = o.seconds.map(|s| {
+        let d = vrpn::time::checked_duration(s).unwrap_or(vrpn::time::MAX_PERIOD);
+        vrpn::time::instant_after(start, d)
+    });
     let mut next = start;
     while !signals::stop_requested()
         && !output::closed()

@@ -45,6 +45,8 @@ fn main() -> ExitCode {
         return ExitCode::SUCCESS;
     }
     signals::install();
+    // 255 clients on the UDP path hold three sockets each.
+    vrpn::server::raise_descriptor_limit();
     if let Some(shift) = opts.clock_shift {
         vrpn::time::shift_wall_clock(shift);
         errln!("{PROGRAM}: stamping messages {shift:+} s off this host's clock (-clockshift)");
@@ -96,9 +98,18 @@ fn main() -> ExitCode {
     }
     let verbose = opts.verbose;
     // A device's port problems (cannot open it, lost it) and recoveries, once per change.
-    let status: vrpn::driver::StatusSink = std::rc::Rc::new(|name: &str, status: &DeviceStatus| {
-        errln!("{PROGRAM}: {name}: {status}");
-    });
+    // Under -v the device's own text about a problem is shown as it is sent (`show_texts`):
+    // the status line would say the same thing a second time.
+    let status: vrpn::driver::StatusSink =
+        std::rc::Rc::new(move |name: &str, status: &DeviceStatus| {
+            let told_by_text = matches!(
+                status,
+                DeviceStatus::CannotOpen { .. } | DeviceStatus::Lost { .. }
+            );
+            if !(verbose && told_by_text) {
+                errln!("{PROGRAM}: {name}: {status}");
+            }
+        });
     let cx = vrpn::driver::BuildContext::with_status(&conn, status).with_device_tree(tree);
     let devices = build_devices_in(&entries, &cx, opts.warn_only, |note| match note {
         BuildNote::Opened { entry, name } if verbose => {

@@ -30,14 +30,18 @@ pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
+pub mod immersionbox;
 pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
 pub mod orb;
+pub mod pinchglove;
 pub mod polaris;
 pub mod spacemouse;
 pub mod threespace;
+pub mod uncjoystick;
+pub mod wanda;
 pub mod xkeys;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -76,13 +80,17 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &immersionbox::DRIVER,
     &inertiamouse::DRIVER,
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
     &orb::DRIVER,
+    &pinchglove::DRIVER,
     &polaris::DRIVER,
     &threespace::DRIVER,
+    &uncjoystick::DRIVER,
+    &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,

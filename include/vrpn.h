@@ -214,7 +214,9 @@ typedef struct VrpnTracker VrpnTracker;
 typedef struct VrpnTrackerServer VrpnTrackerServer;
 
 /**
- * A time stamp: seconds and microseconds since 1970-01-01 UTC (C `struct timeval`).
+ * A time stamp: seconds and microseconds since 1970-01-01 UTC (C `struct timeval`). The
+ * report functions refuse a time a message cannot carry (before 1970, after 2106-02-07) with
+ * `VRPN_STATUS_INVALID_ARGUMENT`.
  */
 typedef struct {
     /**

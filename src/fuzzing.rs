@@ -172,7 +172,8 @@ pub fn log_reader(data: &[u8]) {
         return;
     };
     let mut names = NameTable::new();
-    for e in reader.entries() {
+    let mut entries = reader.entries();
+    while let Some(e) = entries.next_entry() {
         let Ok(entry) = e else {
             break;
         };

@@ -2,8 +2,21 @@
 //! since the Unix epoch.
 //!
 //! On the wire the seconds are the low 32 bits of `time_t`. We keep them in an
-//! `i64` so arithmetic never overflows; header seconds are decoded as unsigned 32-bit (what a
-//! 64-bit C++ peer does) and payload timevals as signed.
+//! `i64`; header seconds are decoded as unsigned 32-bit (what a 64-bit C++ peer does) and
+//! payload timevals as signed.
+//!
+//! # Range and saturation
+//!
+//! Arithmetic on [`TimeVal`] never overflows and never panics: results are clamped to
+//! [`TimeVal::MIN`]`..=`[`TimeVal::MAX`], ±2^62 µs (about ±146,000 years), far beyond any time a
+//! message can carry yet small enough that the sum or difference of two such times fits an
+//! `i64` of microseconds. Float seconds are converted the same way: `±∞` and finite values
+//! beyond the range saturate, NaN adds nothing (or is refused by the `checked_` forms).
+//!
+//! Float seconds that become a [`Duration`] (a rate's period, a timeout) go through
+//! [`checked_duration`] or [`period_of_rate`], which refuse what no schedule can use — NaN,
+//! negative values, anything longer than [`MAX_PERIOD`] — instead of panicking as
+//! `Duration::from_secs_f64` does.
 
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -46,6 +59,14 @@ pub struct Now {
 pub trait TimeSource {
     /// The time.
     fn now(&self) -> Now;
+
+    /// A reading no earlier than anything read so far in the pass, for the timestamps clock
+    /// synchronisation needs on the far side of a read (its bound assumes a reply's `t2` and
+    /// `t4` are taken after the bytes arrived). The shell's pass clock reads the clocks again;
+    /// a [`Now`] (virtual time) gives itself.
+    fn fresh(&self) -> Now {
+        self.now()
+    }
 }
 
 impl TimeSource for Now {
@@ -78,7 +99,49 @@ impl Now {
     }
 }
 
+/// Longest period or delay made from float seconds (10^9 s, about 31.7 years): a rate below
+/// one report per `MAX_PERIOD` is refused, since no schedule of that length means anything
+/// and `Instant` arithmetic on longer ones could overflow.
+pub const MAX_PERIOD: Duration = Duration::from_secs(1_000_000_000);
+
+/// Float seconds as a [`Duration`], or `None` for NaN, a negative value or more than
+/// [`MAX_PERIOD`] (where `Duration::from_secs_f64` would panic or a deadline overflow).
+pub fn checked_duration(secs: f64) -> Option<Duration> {
+    if secs >= 0.0 && secs <= MAX_PERIOD.as_secs_f64() {
+        Some(Duration::from_secs_f64(secs))
+    } else {
+        None
+    }
+}
+
+/// The period of `rate` events per second, or `None` unless the rate is finite and at least
+/// one per [`MAX_PERIOD`] (within a millionth, so that `1e-9` read in single precision
+/// counts). A very high rate gives a zero period (due at every pass).
+pub fn period_of_rate(rate: f64) -> Option<Duration> {
+    if !(rate.is_finite() && rate > 0.0) {
+        return None;
+    }
+    let period = 1.0 / rate;
+    let longest = MAX_PERIOD.as_secs_f64();
+    (period <= longest * (1.0 + 1e-6)).then(|| Duration::from_secs_f64(period.min(longest)))
+}
+
+/// `at + d`, or the latest instant that can be represented on the way there (for timeouts
+/// given by a caller; never panics).
+pub fn instant_after(at: Instant, d: Duration) -> Instant {
+    at.checked_add(d)
+        .or_else(|| at.checked_add(d.min(MAX_PERIOD)))
+        .unwrap_or(at)
+}
+
+/// Microseconds a [`TimeVal`] may be away from the epoch (2^62 − 1, about 146,000 years): the
+/// difference of any two such times fits an `i64`.
+pub const MAX_MICROS: i64 = (1 << 62) - 1;
+
 /// A point in time as VRPN messages carry it.
+///
+/// Arithmetic saturates at [`TimeVal::MIN`] and [`TimeVal::MAX`] (see the
+/// [module documentation](self)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct TimeVal {
     /// Whole seconds since 1970-01-01 UTC.
@@ -91,9 +154,21 @@ impl TimeVal {
     /// The zero time (what C++ devices stamp before their first report).
     pub const ZERO: TimeVal = TimeVal { sec: 0, usec: 0 };
 
-    /// Builds a normalised time value.
+    /// The latest time: [`MAX_MICROS`] after the epoch.
+    pub const MAX: TimeVal = TimeVal {
+        sec: MAX_MICROS / 1_000_000,
+        usec: MAX_MICROS % 1_000_000,
+    };
+
+    /// The earliest time: [`MAX_MICROS`] before the epoch.
+    pub const MIN: TimeVal = TimeVal {
+        sec: -(MAX_MICROS / 1_000_000) - 1,
+        usec: 1_000_000 - MAX_MICROS % 1_000_000,
+    };
+
+    /// Builds a normalised time value (saturating at [`TimeVal::MIN`]/[`TimeVal::MAX`]).
     pub fn new(sec: i64, usec: i64) -> TimeVal {
-        TimeVal { sec, usec }.normalised()
+        TimeVal::from_micros(sec.saturating_mul(1_000_000).saturating_add(usec))
     }
 
     /// The current wall-clock time, as C++ `vrpn_gettimeofday` reads it (moved by
@@ -120,7 +195,7 @@ impl TimeVal {
         };
         match WALL_CLOCK_SHIFT_US.load(Ordering::Relaxed) {
             0 => read,
-            shift => TimeVal::from_micros(read.as_micros() + shift),
+            shift => TimeVal::from_micros(read.as_micros().saturating_add(shift)),
         }
     }
 
@@ -129,56 +204,76 @@ impl TimeVal {
         self.sec as f64 + self.usec as f64 * 1e-6
     }
 
-    /// Builds a time value from float seconds (rounded to the microsecond).
+    /// Builds a time value from float seconds (rounded to the microsecond), saturating at
+    /// [`TimeVal::MIN`]/[`TimeVal::MAX`]; NaN gives [`TimeVal::ZERO`]. See
+    /// [`checked_from_secs_f64`](Self::checked_from_secs_f64) to refuse such values instead.
     pub fn from_secs_f64(secs: f64) -> TimeVal {
         let sec = secs.floor();
         let usec = ((secs - sec) * 1e6).round();
+        // `as` saturates (NaN gives 0); `new` saturates the rest.
         TimeVal::new(sec as i64, usec as i64)
     }
 
-    /// Total microseconds, handy for differences.
-    pub fn as_micros(&self) -> i64 {
-        self.sec * 1_000_000 + self.usec
+    /// Float seconds as a time value, or `None` for NaN and for values beyond
+    /// [`TimeVal::MIN`]`..=`[`TimeVal::MAX`].
+    pub fn checked_from_secs_f64(secs: f64) -> Option<TimeVal> {
+        let limit = MAX_MICROS as f64 * 1e-6;
+        (secs.abs() <= limit).then(|| TimeVal::from_secs_f64(secs))
     }
 
-    /// Builds a time value from total microseconds.
+    /// Total microseconds, handy for differences (within ±[`MAX_MICROS`] for any value, so the
+    /// sum or difference of two never overflows).
+    #[inline]
+    pub fn as_micros(&self) -> i64 {
+        self.sec
+            .saturating_mul(1_000_000)
+            .saturating_add(self.usec)
+            .clamp(-MAX_MICROS, MAX_MICROS)
+    }
+
+    /// Builds a time value from total microseconds (saturating at ±[`MAX_MICROS`]).
+    #[inline]
     pub fn from_micros(us: i64) -> TimeVal {
-        TimeVal::new(us.div_euclid(1_000_000), us.rem_euclid(1_000_000))
+        let us = us.clamp(-MAX_MICROS, MAX_MICROS);
+        TimeVal {
+            sec: us.div_euclid(1_000_000),
+            usec: us.rem_euclid(1_000_000),
+        }
     }
 
     /// `self - earlier` in seconds (negative when `earlier` is later).
     pub fn seconds_since(&self, earlier: TimeVal) -> f64 {
-        (self.as_micros() - earlier.as_micros()) as f64 * 1e-6
+        self.as_micros().saturating_sub(earlier.as_micros()) as f64 * 1e-6
     }
 
-    /// Adds float seconds (rounded to the microsecond).
+    /// Adds float seconds (rounded to the microsecond), saturating; NaN adds nothing.
     pub fn plus_secs(&self, secs: f64) -> TimeVal {
-        if !secs.is_finite() {
-            return if secs > 0.0 {
-                TimeVal::new(i64::MAX / 2_000_000, 0)
-            } else {
-                *self
-            };
-        }
-        TimeVal::from_micros(self.as_micros() + (secs * 1e6).round() as i64)
+        // `as` saturates (NaN gives 0).
+        let add = (secs * 1e6).round() as i64;
+        TimeVal::from_micros(self.as_micros().saturating_add(add))
     }
 
-    /// Adds a duration.
+    /// Adds a duration, saturating.
     pub fn plus(&self, d: Duration) -> TimeVal {
-        TimeVal::from_micros(self.as_micros() + d.as_micros() as i64)
+        let add = i64::try_from(d.as_micros()).unwrap_or(i64::MAX);
+        TimeVal::from_micros(self.as_micros().saturating_add(add))
     }
 
-    fn normalised(self) -> TimeVal {
-        let total = self.sec * 1_000_000 + self.usec;
-        TimeVal {
-            sec: total.div_euclid(1_000_000),
-            usec: total.rem_euclid(1_000_000),
-        }
+    /// Whether a message header carries this time as it is: from the epoch to 2106-02-07
+    /// (unsigned 32-bit seconds). APIs that take a time from outside (the Python and C
+    /// bindings) refuse any other; [`to_wire`](Self::to_wire) saturates it.
+    pub fn fits_header(&self) -> bool {
+        (0..=i64::from(u32::MAX)).contains(&self.sec) && (0..1_000_000).contains(&self.usec)
     }
 
-    /// The two 32-bit words sent on the wire (low 32 bits of the seconds).
+    /// The two 32-bit words sent on the wire. A header holds unsigned seconds (1970 to
+    /// 2106): a time before or after is sent as the nearest end of that range.
+    #[inline]
     pub fn to_wire(&self) -> (u32, u32) {
-        (self.sec as u32, self.usec as u32)
+        (
+            self.sec.clamp(0, i64::from(u32::MAX)) as u32,
+            self.usec as u32,
+        )
     }
 
     /// Decodes header words: seconds unsigned (as a 64-bit C++ peer reads them).
@@ -228,6 +323,83 @@ mod tests {
             }
         );
         assert!((t.seconds_since(TimeVal::new(10, 0)) - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn arithmetic_saturates_instead_of_overflowing() {
+        assert_eq!(TimeVal::MAX.as_micros(), MAX_MICROS);
+        assert_eq!(TimeVal::MIN.as_micros(), -MAX_MICROS);
+        assert_eq!(TimeVal::from_micros(MAX_MICROS), TimeVal::MAX);
+        assert_eq!(TimeVal::from_micros(-MAX_MICROS), TimeVal::MIN);
+        assert_eq!(TimeVal::from_micros(i64::MIN), TimeVal::MIN);
+        assert_eq!(TimeVal::new(i64::MAX, 999_999), TimeVal::MAX);
+        assert_eq!(TimeVal::new(i64::MIN, -1), TimeVal::MIN);
+        let odd = TimeVal {
+            sec: i64::MAX,
+            usec: i64::MAX,
+        };
+        assert_eq!(odd.as_micros(), MAX_MICROS);
+        assert!(TimeVal::MAX.seconds_since(TimeVal::MIN) > 9.2e12);
+        let t = TimeVal::new(1_700_000_000, 5);
+        assert_eq!(t.plus_secs(1e14), TimeVal::MAX);
+        assert_eq!(t.plus_secs(1e300), TimeVal::MAX);
+        assert_eq!(t.plus_secs(f64::INFINITY), TimeVal::MAX);
+        assert_eq!(t.plus_secs(f64::NEG_INFINITY), TimeVal::MIN);
+        assert_eq!(t.plus_secs(f64::NAN), t);
+        assert_eq!(t.plus_secs(1.5), TimeVal::new(1_700_000_001, 500_005));
+        assert_eq!(TimeVal::MAX.plus_secs(1.0), TimeVal::MAX);
+        assert_eq!(t.plus(Duration::MAX), TimeVal::MAX);
+        assert_eq!(TimeVal::MAX.plus(Duration::from_secs(1)), TimeVal::MAX);
+        assert_eq!(TimeVal::from_secs_f64(1e300), TimeVal::MAX);
+        assert_eq!(TimeVal::from_secs_f64(-1e300), TimeVal::MIN);
+        assert_eq!(TimeVal::from_secs_f64(f64::NAN), TimeVal::ZERO);
+        assert_eq!(TimeVal::from_secs_f64(2.25), TimeVal::new(2, 250_000));
+        assert_eq!(TimeVal::checked_from_secs_f64(1e300), None);
+        assert_eq!(TimeVal::checked_from_secs_f64(f64::NAN), None);
+        assert_eq!(
+            TimeVal::checked_from_secs_f64(-0.5),
+            Some(TimeVal::new(-1, 500_000))
+        );
+    }
+
+    #[test]
+    fn wire_seconds_saturate_to_what_a_header_holds() {
+        assert_eq!(TimeVal::MAX.to_wire().0, u32::MAX);
+        assert_eq!(TimeVal::new(1 << 33, 7).to_wire(), (u32::MAX, 7));
+        assert_eq!(TimeVal::new(-1, 0).to_wire(), (0, 0));
+        assert_eq!(TimeVal::new(1_700_000_000, 9).to_wire(), (1_700_000_000, 9));
+        assert!(TimeVal::new(u32::MAX.into(), 999_999).fits_header());
+        assert!(TimeVal::ZERO.fits_header());
+        assert!(!TimeVal::new(1 << 32, 0).fits_header());
+        assert!(!TimeVal::new(-1, 999_999).fits_header());
+        assert!(!TimeVal { sec: 5, usec: -1 }.fits_header());
+    }
+
+    #[test]
+    fn float_durations_are_checked() {
+        assert_eq!(checked_duration(0.25), Some(Duration::from_millis(250)));
+        assert_eq!(checked_duration(0.0), Some(Duration::ZERO));
+        assert_eq!(checked_duration(1e9), Some(Duration::from_secs_f64(1e9)));
+        for bad in [-1e-9, 1e9 + 1.0, 1e30, f64::INFINITY, f64::NAN, -0.0 - 1.0] {
+            assert_eq!(checked_duration(bad), None, "{bad}");
+        }
+        assert_eq!(period_of_rate(4.0), Some(Duration::from_millis(250)));
+        let about_max = |d: Option<Duration>| {
+            d.is_some_and(|d| d.max(MAX_PERIOD) - d.min(MAX_PERIOD) < Duration::from_micros(1))
+        };
+        assert!(about_max(period_of_rate(1e-9)));
+        let single = f64::from(1e-9f32); // a hair below 1e-9
+        assert!(about_max(period_of_rate(single)));
+        assert_eq!(period_of_rate(1e300), Some(Duration::ZERO));
+        for bad in [1e-20, 5e-20, 9.9e-10, 0.0, -1.0, f64::INFINITY, f64::NAN] {
+            assert_eq!(period_of_rate(bad), None, "{bad}");
+        }
+        let t = Instant::now();
+        assert_eq!(
+            instant_after(t, Duration::from_secs(1)),
+            t + Duration::from_secs(1)
+        );
+        assert!(instant_after(t, Duration::MAX) >= t + MAX_PERIOD);
     }
 
     #[test]

@@ -112,7 +112,8 @@ fn user_types(path: &Path) -> Vec<String> {
     let log = LogReader::open(path).unwrap();
     let mut names = NameTable::new();
     let mut types = Vec::new();
-    for e in log.entries() {
+    let mut entries = log.entries();
+    while let Some(e) = entries.next_entry() {
         let e = e.unwrap();
         names.observe(&e).ok();
         if !e.is_system() {

@@ -654,20 +654,18 @@ fn a_step_of_the_peer_clock_is_followed() {
     let mut sim = Sim::new(clocks, Link::asymmetric(), ClockSyncConfig::default(), 13);
     sim.run(30 * MINUTE, 100_000_000);
     assert!(sim.report.max_ratio <= 1.0);
-    // Right after the step the estimate is 2.5 s off until two contradicting samples confirm
-    // it: the next re-sync round holds one aside, the one after confirms (10 s at most, more
-    // if a reply is lost). Then the history restarts and the bound holds again.
+    // Right after the step the estimate is 2.5 s off until three contradicting samples in a
+    // row confirm it: the next two re-sync rounds hold theirs aside, the third confirms (15 s
+    // at most, 5 s more per lost reply). Then the history restarts and the bound holds again.
     sim.strict = false;
     sim.run(31 * MINUTE, 100_000_000);
     let stats = sim.client.stats();
     assert_eq!(stats.clock_steps, 1);
     assert!(sim.violations > 0);
-    assert!(
-        sim.last_violation - step_at <= 11 * NS_PER_SEC,
-        "{}",
-        sim.last_violation
-    );
-    assert_eq!(sim.outcomes[outcome_index(ReplyOutcome::Held)], 1);
+    let confirmed_after = (sim.last_violation - step_at) as f64 * 1e-9;
+    eprintln!("peer clock step confirmed {confirmed_after:.1} s after it happened");
+    assert!(confirmed_after <= 21.0, "{confirmed_after}");
+    assert_eq!(sim.outcomes[outcome_index(ReplyOutcome::Held)], 2);
     sim.strict = true;
     sim.report = Report::default();
     sim.settle_after = 0;
@@ -691,7 +689,9 @@ fn a_step_of_the_local_wall_clock_is_followed() {
     sim.strict = false;
     sim.run(16 * MINUTE, 100_000_000);
     assert_eq!(sim.client.stats().clock_steps, 1);
-    assert!(sim.last_violation - step_at <= 11 * NS_PER_SEC);
+    let confirmed_after = (sim.last_violation - step_at) as f64 * 1e-9;
+    eprintln!("local clock step confirmed {confirmed_after:.1} s after it happened");
+    assert!(confirmed_after <= 21.0, "{confirmed_after}");
     sim.strict = true;
     sim.report = Report::default();
     sim.run(HOUR, 100_000_000);

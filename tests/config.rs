@@ -260,13 +260,21 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
             "vrpn_CerealBox",
-            "vrpn_Tracker_Dyna"
+            "vrpn_Tracker_Dyna",
+            "vrpn_Wanda",
+            "vrpn_Button_PinchGlove",
+            "vrpn_Joystick",
+            "vrpn_ImmersionBox"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
     let fastraks: Vec<Fastrak> = entries
         .iter()
-        .filter_map(|e| e.config.downcast_ref::<Fastrak>().cloned())
+        .filter(|e| e.keyword == "vrpn_Tracker_Fastrak")
+        .filter_map(|e| match typed(e) {
+            DeviceConfig::Fastrak(f) => Some(f),
+            _ => None,
+        })
         .collect();
     let shape: Vec<(usize, usize, bool, bool)> = fastraks
         .iter()

@@ -55,7 +55,8 @@ fn every_received_message_is_in_the_log_across_a_server_kill() {
         let mut names = NameTable::new();
         let mut logged = 0;
         let mut tracker_descriptions = 0;
-        for e in reader.entries() {
+        let mut entries = reader.entries();
+        while let Some(e) = entries.next_entry() {
             let e = e.unwrap();
             if e.type_id() == -1 && e.payload.ends_with(b"Tracker0\0") {
                 tracker_descriptions += 1;

@@ -111,6 +111,49 @@ fn server_verbose_shows_device_texts_on_stderr_and_stdout_keeps_the_port_line() 
     );
 }
 
+/// A serial port that cannot be opened is told on stderr exactly once, with or without `-v`
+/// (under `-v` by the device's own text, otherwise by the status line), though the device
+/// retries every second.
+#[test]
+fn server_reports_a_missing_serial_port_once_with_and_without_verbose() {
+    let dir = Scratch::new("missing-port");
+    let cfg = dir.path("vrpn.cfg");
+    let port = dir.path("no-such-tty");
+    std::fs::write(
+        &cfg,
+        format!("vrpn_Tracker_Fastrak Fastrak0 {port} 19200\n"),
+    )
+    .unwrap();
+    for verbose in [false, true] {
+        let mut args = vec!["-f", cfg.as_str(), "0"];
+        if verbose {
+            args.insert(0, "-v");
+        }
+        let mut child = Command::new(SERVER)
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut out = BufReader::new(child.stdout.take().unwrap());
+        let mut first = String::new();
+        out.read_line(&mut first).unwrap();
+        let stderr = collect(child.stderr.take().unwrap());
+        // Long enough for two more attempts to open the port.
+        let end = Instant::now() + Duration::from_millis(2500);
+        while Instant::now() < end {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        std::thread::sleep(Duration::from_millis(50));
+        let err = stderr.lock().unwrap().clone();
+        let told: Vec<&str> = err.lines().filter(|l| l.contains(&port)).collect();
+        assert_eq!(told.len(), 1, "-v {verbose}: {err}");
+        assert!(told[0].contains("no such file"), "{err}");
+    }
+}
+
 /// A server in this process: a tracker and a text sender that warns, both named `Dev0`.
 struct Warner {
     conn: Connection,

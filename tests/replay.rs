@@ -20,6 +20,16 @@ fn fixture(name: &str) -> String {
     )
 }
 
+/// The type ids of a log's whole entries, in order (up to any damage).
+fn type_ids(log: &LogReader) -> Vec<i32> {
+    let mut out = Vec::new();
+    let mut entries = log.entries();
+    while let Some(Ok(e)) = entries.next_entry() {
+        out.push(e.type_id());
+    }
+    out
+}
+
 fn expected(name: &str) -> Value {
     serde_json::from_slice(&std::fs::read(fixture(&format!("{name}.expected.json"))).unwrap())
         .unwrap()
@@ -180,11 +190,9 @@ fn truncated_log_plays_every_whole_message_then_says_where() {
     let cut = bytes.len() - 30;
     let path = tmp("truncated.vrpn");
     std::fs::write(&path, &bytes[..cut]).unwrap();
-    let whole = LogReader::open(&path)
-        .unwrap()
-        .entries()
-        .filter_map(Result::ok)
-        .filter(|e| e.type_id() == 4)
+    let whole = type_ids(&LogReader::open(&path).unwrap())
+        .iter()
+        .filter(|&&t| t == 4)
         .count();
     let conn = Connection::replay_file(&path).unwrap();
     let notices = Rc::new(RefCell::new(Vec::new()));
@@ -245,7 +253,8 @@ fn client_log_survives_a_server_restart_and_holds_every_received_message() {
     assert_eq!(&reader.cookie_bytes()[..16], b"vrpn: ver. 07.38");
     let mut names = vrpn::log::NameTable::new();
     let mut logged = 0;
-    for e in reader.entries() {
+    let mut entries = reader.entries();
+    while let Some(e) = entries.next_entry() {
         let e = e.unwrap();
         let _ = names.observe(&e);
         if e.type_id() >= 0 && names.type_name(e.type_id()) == Some("vrpn_Tracker Pos_Quat") {
@@ -255,11 +264,7 @@ fn client_log_survives_a_server_restart_and_holds_every_received_message() {
     assert_eq!(logged, received.get(), "every received pose is in the log");
     // The outgoing log has our descriptions for both sessions and a DISCONNECT between.
     let out = LogReader::open(&out_path).unwrap();
-    let disconnects = out
-        .entries()
-        .filter_map(Result::ok)
-        .filter(|e| e.type_id() == -5)
-        .count();
+    let disconnects = type_ids(&out).iter().filter(|&&t| t == -5).count();
     assert!(disconnects >= 1);
     // Our client log replays through our reader exactly as received.
     let replay = Connection::replay_file(&path).unwrap();
@@ -299,18 +304,15 @@ fn server_logs_outgoing_from_start_and_incoming_per_client() {
     drop(null);
     server.close_logs().unwrap();
     let out_log = LogReader::open(&out).unwrap();
-    let entries: Vec<_> = out_log.entries().map(Result::unwrap).collect();
-    assert!(entries.iter().filter(|e| e.type_id() >= 0).count() > 20);
-    assert_eq!(
-        entries.last().unwrap().type_id(),
-        -5,
-        "ends with DISCONNECT"
-    );
+    let types = type_ids(&out_log);
+    assert!(types.iter().filter(|&&t| t >= 0).count() > 20);
+    assert_eq!(*types.last().unwrap(), -5, "ends with DISCONNECT");
     let in_name = inc.replace(".vrpn", "-1.vrpn");
     let in_log = LogReader::open(&in_name).unwrap();
     let mut names = vrpn::log::NameTable::new();
     let mut pings = 0;
-    for e in in_log.entries() {
+    let mut entries = in_log.entries();
+    while let Some(e) = entries.next_entry() {
         let e = e.unwrap();
         let _ = names.observe(&e);
         if names.type_name(e.type_id()) == Some("vrpn_Base ping_message") {
@@ -321,4 +323,146 @@ fn server_logs_outgoing_from_start_and_incoming_per_client() {
         pings >= 1,
         "the client's ping is in the per-client incoming log"
     );
+}
+
+/// What a control called from inside a pose callback did, for one control.
+struct InCallback {
+    /// Times (µs since the first pose) of the poses delivered, in order.
+    poses: Vec<i64>,
+    /// Dropped-connection events (a reset fires one).
+    drops: u32,
+    /// `elapsed()` after the outside call returned.
+    elapsed: f64,
+}
+
+/// Replays the golden tracker log paused, asks to play the first second from outside, and
+/// calls `control` from inside the 10th pose callback (issue 29, item 1: this panicked and
+/// broke the remote for good). Then plays the rest from outside.
+fn control_in_callback(control: &'static str) -> InCallback {
+    let conn = Connection::replay_file(&fixture("tracker_udp_lob.out.vrpn")).unwrap();
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    let r = conn.replay().unwrap();
+    let first = r.first_time().unwrap();
+    let poses = Rc::new(RefCell::new(Vec::new()));
+    let drops = Rc::new(Cell::new(0u32));
+    let d = drops.clone();
+    conn.on_event(ConnectionEvent::DroppedConnection, move || {
+        d.set(d.get() + 1)
+    });
+    let (p, weak) = (poses.clone(), conn.downgrade());
+    tracker.on_pose(move |pose| {
+        let n = {
+            let mut p = p.borrow_mut();
+            p.push(((pose.time.seconds_since(first)) * 1e6).round() as i64);
+            p.len()
+        };
+        if n != 10 {
+            return;
+        }
+        let conn = weak.upgrade().unwrap();
+        let r = conn.replay().unwrap();
+        // Every query works from a callback too.
+        assert!(!r.eof() && r.elapsed() < 1.0 && r.length_secs() > 3.0);
+        assert!(r.first_time().is_some() && r.last_time().is_some());
+        let _ = (r.file_time(), r.rate());
+        match control {
+            "set_rate" => r.set_rate(f64::INFINITY),
+            "reset" => r.reset(),
+            "play_to_time" => r.play_to_time(2.0),
+            "play_one" => assert!(r.play_one()),
+            "jump_to_time" => assert!(r.jump_to_time(2.0)),
+            "mainloop" => conn.mainloop().unwrap(),
+            other => panic!("{other}"),
+        }
+    });
+    r.set_rate(0.0);
+    r.play_to_time(1.0);
+    let elapsed = r.elapsed();
+    let before_rest = poses.borrow().len();
+    // The remote still works: everything after plays from outside, in order.
+    r.play_to_time(r.length_secs() + 1.0);
+    assert!(r.eof(), "{control}: not at the end");
+    assert!(
+        poses.borrow().len() > before_rest,
+        "{control}: nothing played after"
+    );
+    assert_eq!(tracker.bad_messages(), 0, "{control}");
+    let poses = poses.borrow().clone();
+    InCallback {
+        poses,
+        drops: drops.get(),
+        elapsed,
+    }
+}
+
+#[test]
+fn every_replay_control_is_safe_from_inside_a_callback() {
+    // The reference: the log played in order, in one go, from outside.
+    let all = control_in_callback("mainloop").poses;
+    assert_eq!(all.len(), 410);
+    let up_to = |secs: f64| all.iter().filter(|&&t| t as f64 <= secs * 1e6).count();
+    let sorted = |v: &[i64]| v.windows(2).all(|w| w[0] <= w[1]);
+
+    // A rate change takes effect at once; the paused play-to still ends at 1 s.
+    let r = control_in_callback("set_rate");
+    assert_eq!(r.poses, all, "set_rate");
+    assert!((r.elapsed - 1.0).abs() < 1e-6, "{}", r.elapsed);
+
+    // Reset: back to the start when the callback returns (a dropped-connection event, as in
+    // C++); the rest of the play-to is dropped with the old position, so the outside
+    // play-to then plays the whole log again.
+    let r = control_in_callback("reset");
+    assert_eq!(r.drops, 1);
+    assert_eq!(&r.poses[..10], &all[..10]);
+    assert_eq!(&r.poses[10..], &all[..], "reset");
+
+    // Play-to from the callback replaces the running one: up to 2 s, then the rest.
+    let r = control_in_callback("play_to_time");
+    assert!((r.elapsed - 2.0).abs() < 1e-6, "{}", r.elapsed);
+    assert_eq!(r.poses, all, "play_to_time");
+    assert_eq!(
+        r.poses.iter().filter(|&&t| t as f64 <= 2e6).count(),
+        up_to(2.0)
+    );
+
+    // Play-one replaces the running play-to: exactly one more entry, then nothing until the
+    // outside play-to; no pose is lost or repeated.
+    let r = control_in_callback("play_one");
+    assert!(r.elapsed < 1.0, "{}", r.elapsed);
+    assert_eq!(r.poses, all, "play_one");
+
+    // A jump from the callback: nothing delivered between the 10th pose and 2 s.
+    let r = control_in_callback("jump_to_time");
+    assert!((r.elapsed - 2.0).abs() < 1e-6, "{}", r.elapsed);
+    assert_eq!(&r.poses[..10], &all[..10]);
+    assert!(r.poses[10] as f64 > 2e6, "{:?}", &r.poses[..12]);
+    assert_eq!(r.poses.len(), 10 + (all.len() - up_to(2.0)), "jump_to_time");
+    assert!(sorted(&r.poses));
+}
+
+/// Controls called from a callback that `mainloop()` runs (at a rate, not paused) are just as
+/// safe, and what they play is delivered by that same pass.
+#[test]
+fn a_reset_inside_a_mainloop_callback_replays_from_the_start() {
+    let conn = Connection::replay_file(&fixture("tracker_udp_lob.out.vrpn")).unwrap();
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    conn.replay().unwrap().set_rate(f64::INFINITY);
+    let n = Rc::new(Cell::new(0u32));
+    let (c, weak) = (n.clone(), conn.downgrade());
+    tracker.on_pose(move |_| {
+        c.set(c.get() + 1);
+        if c.get() == 100 {
+            weak.upgrade().unwrap().replay().unwrap().reset();
+        }
+    });
+    let start = Instant::now();
+    while !conn.replay().unwrap().eof() {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "stalled at {}",
+            n.get()
+        );
+        tracker.mainloop().unwrap();
+    }
+    assert_eq!(n.get(), 100 + 410);
 }

@@ -154,7 +154,8 @@ fn publish_failure(e: PublishError) -> Failure {
 }
 
 /// A time argument from C: NULL means now; otherwise microseconds must be 0..=999999 (a
-/// `struct timeval` in its normal form), as C++ VRPN and every reader of the stamp expect.
+/// `struct timeval` in its normal form), as C++ VRPN and every reader of the stamp expect,
+/// and the time must be one a message header can carry (1970 to 2106).
 ///
 /// # Safety
 /// `time` is NULL or points to a readable `VrpnTimeVal`.
@@ -170,7 +171,14 @@ unsafe fn time_arg(conn: &Connection, time: *const VrpnTimeVal) -> Result<TimeVa
             t.sec, t.usec
         )));
     }
-    Ok(TimeVal::from(t))
+    let time = TimeVal::from(t);
+    if !time.fits_header() {
+        return Err(Failure::invalid(format!(
+            "time {{sec {}, usec {}}} is outside what a VRPN message carries (0 to 4294967295 s)",
+            t.sec, t.usec
+        )));
+    }
+    Ok(time)
 }
 
 /// Reads `N` doubles from C.

@@ -24,7 +24,9 @@ const _: () = assert!(VRPN_ANALOG_MAX_CHANNELS == analog::CHANNEL_MAX);
 const _: () = assert!(VRPN_BUTTON_MAX_BUTTONS == button::MAX_BUTTONS);
 const _: () = assert!(VRPN_DIAL_MAX_DIALS == crate::wire::payload::dial::MAX_DIALS);
 
-/// A time stamp: seconds and microseconds since 1970-01-01 UTC (C `struct timeval`).
+/// A time stamp: seconds and microseconds since 1970-01-01 UTC (C `struct timeval`). The
+/// report functions refuse a time a message cannot carry (before 1970, after 2106-02-07) with
+/// `VRPN_STATUS_INVALID_ARGUMENT`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct VrpnTimeVal {

@@ -4,6 +4,7 @@
 use super::device_ref::DeviceRef;
 use super::error::{ConfigError, ConfigErrorKind, Ctx};
 use super::BAUD_RATES;
+use crate::time::{checked_duration, period_of_rate, MAX_PERIOD};
 use crate::wire::MAX_NAME_LEN;
 
 /// Fails unless `args` has at least `min` tokens; `usage` names them.
@@ -127,6 +128,55 @@ pub fn non_negative(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, Config
     }
 }
 
+/// A report rate (per second) greater than 0 that a schedule can use: at least one report per
+/// [`MAX_PERIOD`] (a smaller rate would panic in `Duration` arithmetic or never report).
+pub fn rate(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+    let v = positive(ctx, field, tok)?;
+    schedulable(ctx, field, tok, period_of_rate(f64::from(v)).is_some())?;
+    Ok(v)
+}
+
+/// A report rate that may also be 0 (the fly trackers then use a 1-second interval).
+pub fn rate_or_zero(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+    let v = non_negative(ctx, field, tok)?;
+    schedulable(
+        ctx,
+        field,
+        tok,
+        v == 0.0 || period_of_rate(f64::from(v)).is_some(),
+    )?;
+    Ok(v)
+}
+
+/// A period in seconds, greater than 0 and at most [`MAX_PERIOD`].
+pub fn period(ctx: &Ctx<'_>, field: &str, tok: &str) -> Result<f32, ConfigError> {
+    let v = positive(ctx, field, tok)?;
+    if checked_duration(f64::from(v)).is_none() {
+        return Err(ctx.err(
+            ConfigErrorKind::OutOfRange,
+            format!(
+                "{field} must be at most {} seconds (about 31.7 years), found {tok}",
+                MAX_PERIOD.as_secs()
+            ),
+        ));
+    }
+    Ok(v)
+}
+
+fn schedulable(ctx: &Ctx<'_>, field: &str, tok: &str, ok: bool) -> Result<(), ConfigError> {
+    if ok {
+        return Ok(());
+    }
+    Err(ctx.err(
+        ConfigErrorKind::OutOfRange,
+        format!(
+            "{field} must be at least 1e-9 per second (one report every {} seconds, about 31.7 \
+             years), found {tok}",
+            MAX_PERIOD.as_secs()
+        ),
+    ))
+}
+
 /// A baud rate from [`BAUD_RATES`].
 pub fn baud(ctx: &Ctx<'_>, tok: &str) -> Result<u32, ConfigError> {
     let v = int_in(ctx, "baud", tok, i64::from(i32::MIN), i64::from(i32::MAX))?;
@@ -248,6 +298,34 @@ mod tests {
         let e = positive(&c, "rate", "0").unwrap_err();
         assert_eq!(e.message(), "kw: rate must be greater than 0, found 0");
         assert_eq!(non_negative(&c, "rate", "0"), Ok(0.0));
+    }
+
+    #[test]
+    fn rates_and_periods_must_fit_a_schedule() {
+        let c = ctx();
+        assert_eq!(rate(&c, "rate", "60"), Ok(60.0));
+        assert_eq!(rate(&c, "rate", "1e-9"), Ok(1e-9));
+        for tiny in ["1e-20", "5e-20", "1e-10", "1e-45"] {
+            let e = rate(&c, "rate", tiny).unwrap_err();
+            assert_eq!(e.kind(), ConfigErrorKind::OutOfRange);
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "t.cfg:7: kw: rate must be at least 1e-9 per second (one report every \
+                     1000000000 seconds, about 31.7 years), found {tiny}"
+                )
+            );
+        }
+        assert!(rate(&c, "rate", "0").is_err());
+        assert_eq!(rate_or_zero(&c, "update_rate", "0"), Ok(0.0));
+        assert!(rate_or_zero(&c, "update_rate", "1e-20").is_err());
+        assert_eq!(period(&c, "period_seconds", "2.5"), Ok(2.5));
+        let e = period(&c, "period_seconds", "1e30").unwrap_err();
+        assert_eq!(
+            e.message(),
+            "kw: period_seconds must be at most 1000000000 seconds (about 31.7 years), found 1e30"
+        );
+        assert!(period(&c, "period_seconds", "0").is_err());
     }
 
     #[test]

@@ -133,6 +133,23 @@ impl<'t, 'r> ConfigLine<'t, 'r> {
         fields::non_negative(&self.ctx, field, self.tok(i, field)?)
     }
 
+    /// Argument `i` as a report rate per second: greater than 0 and at least one report per
+    /// [`MAX_PERIOD`](crate::time::MAX_PERIOD), so that a schedule can hold it.
+    pub fn rate(&self, i: usize, field: &str) -> Result<f32, ConfigError> {
+        fields::rate(&self.ctx, field, self.tok(i, field)?)
+    }
+
+    /// Argument `i` as a report rate that may also be 0 (see [`rate`](Self::rate)).
+    pub fn rate_or_zero(&self, i: usize, field: &str) -> Result<f32, ConfigError> {
+        fields::rate_or_zero(&self.ctx, field, self.tok(i, field)?)
+    }
+
+    /// Argument `i` as a period in seconds: greater than 0, at most
+    /// [`MAX_PERIOD`](crate::time::MAX_PERIOD).
+    pub fn period(&self, i: usize, field: &str) -> Result<f32, ConfigError> {
+        fields::period(&self.ctx, field, self.tok(i, field)?)
+    }
+
     /// Argument `i` as a serial baud rate (one of [`BAUD_RATES`](super::BAUD_RATES)).
     pub fn baud(&self, i: usize) -> Result<u32, ConfigError> {
         fields::baud(&self.ctx, self.tok(i, "baud")?)

@@ -97,7 +97,7 @@ pub static TRACKER_NULL: Driver = Driver {
         Ok(Box::new(TrackerNull {
             name: line.name(0)?,
             sensors: line.uint(1, "sensors", 1, MAX_TRACKER_SENSORS)?,
-            rate: line.positive(2, "rate")?,
+            rate: line.rate(2, "rate")?,
         }))
     },
     hints: &[],
@@ -111,7 +111,7 @@ pub static TRACKER_SPIN: Driver = Driver {
         Ok(Box::new(TrackerSpin {
             name: line.name(0)?,
             sensors: line.uint(1, "sensors", 1, MAX_TRACKER_SENSORS)?,
-            rate: line.positive(2, "rate")?,
+            rate: line.rate(2, "rate")?,
             axis: [
                 line.f32(3, "axis_x")?,
                 line.f32(4, "axis_y")?,
@@ -131,7 +131,7 @@ pub static BUTTON_EXAMPLE: Driver = Driver {
         Ok(Box::new(ButtonExample {
             name: line.name(0)?,
             buttons: line.uint(1, "buttons", 1, MAX_BUTTONS)?,
-            rate: line.positive(2, "rate")?,
+            rate: line.rate(2, "rate")?,
         }))
     },
     hints: &[],
@@ -146,7 +146,7 @@ pub static DIAL_EXAMPLE: Driver = Driver {
             name: line.name(0)?,
             dials: line.uint(1, "dials", 1, MAX_DIALS)?,
             spin_rate: line.f32(2, "spin_rate")?,
-            update_rate: line.positive(3, "update_rate")?,
+            update_rate: line.rate(3, "update_rate")?,
         }))
     },
     hints: &[],
@@ -160,7 +160,7 @@ pub static ANALOG_EXAMPLE: Driver = Driver {
         Ok(Box::new(AnalogExample {
             name: line.name(0)?,
             channels: line.uint(1, "channels", 1, MAX_CHANNELS)?,
-            rate: line.positive(2, "rate")?,
+            rate: line.rate(2, "rate")?,
         }))
     },
     hints: &[],
@@ -177,7 +177,7 @@ fn parse_text_example(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpe
     line.need(3, "name, period_seconds, message")?;
     Ok(Box::new(TextExample {
         name: line.name(0)?,
-        period: line.positive(1, "period_seconds")?,
+        period: line.period(1, "period_seconds")?,
         message: line.text_from(2).to_owned(),
     }))
 }

@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::time::Now;
+use crate::time::{period_of_rate, Now};
 
 pub mod analog;
 pub mod analog_output;
@@ -68,10 +68,11 @@ pub struct Cadence {
 }
 
 impl Cadence {
-    /// `rate` times a second; never for a rate that is not positive and finite.
+    /// `rate` times a second; never for a rate that is not finite or below one per
+    /// [`MAX_PERIOD`](crate::time::MAX_PERIOD) (see [`period_of_rate`]).
     pub fn per_second(rate: f64) -> Cadence {
         Cadence {
-            period: (rate > 0.0 && rate.is_finite()).then(|| Duration::from_secs_f64(1.0 / rate)),
+            period: period_of_rate(rate),
             next: None,
         }
     }

@@ -4,7 +4,7 @@
 use std::cell::Cell;
 use std::ops::Deref;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::{decode_text, encode_text, TextSeverity, MAX_TEXT, TEXT_PAYLOAD_LEN};
@@ -12,6 +12,7 @@ use super::{Cadence, ServerDevice};
 use crate::connection::Connection;
 use crate::dispatch::{CallbackList, HandlerId};
 use crate::error::Error;
+use crate::time::checked_duration;
 use crate::time::{Now, TimeVal};
 use crate::wire::class;
 
@@ -173,7 +174,8 @@ pub struct TextExample {
 }
 
 impl TextExample {
-    /// An example text server.
+    /// An example text server sending every `period` seconds (never for a period that is not
+    /// positive or exceeds [`MAX_PERIOD`](crate::time::MAX_PERIOD)).
     pub fn new(
         device: &str,
         conn: &Connection,
@@ -187,9 +189,7 @@ impl TextExample {
             sender: TextSender::new(device, conn)?,
             name: device.to_string(),
             message: message.to_string(),
-            cadence: Cadence::every(
-                (period > 0.0 && period.is_finite()).then(|| Duration::from_secs_f64(period)),
-            ),
+            cadence: Cadence::every(checked_duration(period).filter(|_| period > 0.0)),
         })
     }
 }

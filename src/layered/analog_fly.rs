@@ -4,7 +4,7 @@
 
 use std::cell::RefCell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use super::config::{AnalogFly, FlyMode};
 use super::{
@@ -17,7 +17,7 @@ use crate::devices::tracker::TrackerServer;
 use crate::devices::ServerDevice;
 use crate::dispatch::HandlerId;
 use crate::error::Error;
-use crate::time::{Now, TimeVal};
+use crate::time::{checked_duration, Now, TimeVal};
 
 /// Everything the callbacks and the mainloop share.
 struct State {
@@ -327,9 +327,11 @@ impl ServerDevice for TrackerAnalogFly {
     }
 
     fn next_deadline(&self) -> Option<Instant> {
+        // An interval too long for a deadline (a rate below one per `MAX_PERIOD`) is never.
         let own = self
             .prev_instant
-            .map(|p| p + Duration::from_secs_f64(self.update_interval));
+            .zip(checked_duration(self.update_interval))
+            .map(|(p, d)| p + d);
         own.into_iter().chain(self.source_deadlines()).min()
     }
 }

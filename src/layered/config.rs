@@ -213,7 +213,7 @@ pub struct ButtonFly {
 fn parse_analog_fly(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
     line.need(3, "name, update_rate, absolute|differential")?;
     let name = line.name(0)?;
-    let update_rate = line.non_negative(1, "update_rate")?;
+    let update_rate = line.rate_or_zero(1, "update_rate")?;
     let third = line.word(2)?;
     let mode = FlyMode::parse(third).ok_or_else(|| {
         line.err(
@@ -310,7 +310,7 @@ fn parse_button_fly(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>
     line.need(2, "name, update_rate")?;
     let mut fly = ButtonFly {
         name: line.name(0)?,
-        update_rate: line.non_negative(1, "update_rate")?,
+        update_rate: line.rate_or_zero(1, "update_rate")?,
         axes: Vec::new(),
         vel_scale: None,
         rot_scale: None,

@@ -11,7 +11,8 @@
 //!
 //! let log = LogReader::open("server.vrpn")?;
 //! let mut names = NameTable::new();
-//! for entry in log.entries() {
+//! let mut entries = log.entries();
+//! while let Some(entry) = entries.next_entry() {
 //!     let entry = entry?;
 //!     names.observe(&entry).ok();
 //!     if !entry.is_system() {
@@ -22,6 +23,7 @@
 //! # Ok::<(), vrpn::log::LogError>(())
 //! ```
 
+mod cursor;
 // The entry codec; what a user needs of it is re-exported here.
 pub mod folder;
 #[doc(hidden)]

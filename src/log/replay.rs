@@ -1,14 +1,16 @@
 //! The clock and position of a log replay, free of I/O and of dispatch.
 //!
-//! A [`Replay`] holds a preloaded log and decides which entry plays next; the connection core
-//! feeds each played entry through the same id-translation path as a live peer's message.
+//! A [`Replay`] reads a log through a window of bounded size (whatever the file's size) and
+//! decides which entry plays next; the connection core feeds each played entry through the
+//! same id-translation path as a live peer's message.
 //! The clock follows C++ `vrpn_File_Connection`: the first pass after open or reset only arms
 //! the wall clock; later passes accumulate `elapsed × rate` and play every entry whose time is
 //! at or before `file time + accumulated`, leaving the original timestamps untouched.
 
 use std::time::Instant;
 
-use super::format::{decode_entry, EntryHeader, ENTRY_HEADER_LEN};
+use super::cursor::Cursor;
+use super::format::{EntryHeader, LogEntry, ENTRY_HEADER_LEN};
 use super::reader::{LogError, LogReader};
 use crate::time::TimeVal;
 use crate::wire::COOKIE_LEN;
@@ -31,14 +33,16 @@ enum Mode {
 pub struct DueEntry {
     /// The entry's header (ids are the log's ids).
     pub header: EntryHeader,
-    /// Offset of the payload in [`Replay::bytes`].
+    /// File offset of the payload ([`Replay::payload`] gives its bytes).
     pub payload_at: usize,
 }
 
-/// Replay position, clock and controls over one preloaded log.
+/// Replay position, clock and controls over one log.
 #[derive(Debug)]
 pub struct Replay {
     reader: LogReader,
+    /// The window the replay reads through (allocated at open: playing allocates nothing).
+    cursor: Cursor,
     next: usize,
     file_time: TimeVal,
     start_time: TimeVal,
@@ -56,17 +60,21 @@ pub struct Replay {
 }
 
 impl Replay {
-    /// Opens `path` (read whole into memory) and scans it for its user-message time range.
+    /// Opens `path` (a regular file; the cookie is checked first) and scans it once for its
+    /// user-message time range, reading through a window of bounded size.
     pub fn open(path: &str) -> Result<Replay, LogError> {
         Ok(Replay::from_reader(LogReader::open(path)?))
     }
 
-    /// A replay of an already loaded log.
+    /// A replay of an opened log.
     pub fn from_reader(reader: LogReader) -> Replay {
         let mut lowest: Option<TimeVal> = None;
         let mut highest: Option<TimeVal> = None;
         let mut first_user = None;
-        for e in reader.entries().map_while(Result::ok) {
+        let mut first_time = None;
+        let mut entries = reader.entries();
+        while let Some(Ok(e)) = entries.next_entry() {
+            first_time.get_or_insert(e.time());
             if e.type_id() >= 0 {
                 let t = e.time();
                 first_user.get_or_insert(t);
@@ -74,14 +82,11 @@ impl Replay {
                 highest = Some(highest.map_or(t, |h| h.max(t)));
             }
         }
-        let first_time = reader
-            .entries()
-            .next()
-            .and_then(Result::ok)
-            .map(|e| e.time());
+        drop(entries);
         let start_time = first_user.or(first_time).unwrap_or(TimeVal::ZERO);
         Replay {
             reader,
+            cursor: Cursor::with_window(),
             next: COOKIE_LEN,
             file_time: start_time,
             start_time,
@@ -98,9 +103,16 @@ impl Replay {
         }
     }
 
-    /// The log's bytes (payloads of [`DueEntry`] point into them).
-    pub fn bytes(&self) -> &[u8] {
-        self.reader.bytes()
+    /// The payload of the entry [`next_due`](Self::next_due) returned last (empty if another
+    /// read came in between).
+    pub fn payload(&self, due: &DueEntry) -> &[u8] {
+        self.cursor
+            .held(
+                self.reader.source(),
+                due.payload_at,
+                due.header.payload_len as usize,
+            )
+            .unwrap_or(&[])
     }
 
     /// The cookie of the log.
@@ -121,7 +133,7 @@ impl Replay {
         let Some(last) = self.last_wall.replace(now) else {
             return; // first pass after open or reset: arm the clock, play nothing
         };
-        self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+        self.accumulate(now.duration_since(last));
         let target = self.file_time.plus_secs(self.accum);
         if self.peek_time().is_some_and(|t| t < target) {
             self.accum = 0.0;
@@ -129,10 +141,23 @@ impl Replay {
         }
     }
 
-    fn peek_time(&self) -> Option<TimeVal> {
-        decode_entry(&self.reader.bytes()[self.next..], self.next)
-            .ok()
-            .map(|e| e.time())
+    fn peek_time(&mut self) -> Option<TimeVal> {
+        match self.cursor.entry_at(self.reader.source(), self.next) {
+            Ok(Some(e)) => Some(e.time()),
+            _ => None,
+        }
+    }
+
+    /// The entry at the current position, or the end (`None`, with the damage kept).
+    fn current(&mut self) -> Option<LogEntry<'_>> {
+        match self.cursor.entry_at(self.reader.source(), self.next) {
+            Ok(Some(e)) => Some(e),
+            Ok(None) => None,
+            Err(e) => {
+                self.error = Some(LogError::from_cursor(self.reader.path(), self.next, e));
+                None
+            }
+        }
     }
 
     /// The next entry that is due now, if any. Advances the position and the file time.
@@ -140,29 +165,16 @@ impl Replay {
         if self.eof || self.mode == Mode::Idle {
             return None;
         }
-        let bytes = self.reader.bytes();
-        if self.next >= bytes.len() {
+        let Some(entry) = self.current() else {
             self.finish_mode();
             self.eof = true;
             return None;
-        }
-        let entry = match decode_entry(&bytes[self.next..], self.next) {
-            Ok(e) => e,
-            Err(problem) => {
-                self.error = Some(LogError::BadEntry {
-                    path: self.reader.path().to_owned(),
-                    offset: self.next,
-                    problem,
-                });
-                self.finish_mode();
-                self.eof = true;
-                return None;
-            }
         };
+        let (header, end) = (entry.header, entry.end_offset());
         let due = match self.mode {
             Mode::Idle => false,
-            Mode::Leading => entry.type_id() < 0,
-            Mode::Until(t) => entry.time() <= t,
+            Mode::Leading => header.type_id < 0,
+            Mode::Until(t) => header.time() <= t,
             Mode::One => true,
         };
         if !due {
@@ -172,9 +184,8 @@ impl Replay {
         if self.mode == Mode::One {
             self.mode = Mode::Idle;
         }
-        let header = entry.header;
         let payload_at = self.next + ENTRY_HEADER_LEN;
-        self.next = entry.end_offset();
+        self.next = end;
         self.file_time = header.time();
         Some(DueEntry { header, payload_at })
     }
@@ -207,10 +218,19 @@ impl Replay {
     /// faster, `f64::INFINITY` as fast as possible. Time so far is accumulated at the old rate.
     pub fn set_rate(&mut self, rate: f64, now: Instant) {
         if let Some(last) = self.last_wall {
-            self.accum += now.duration_since(last).as_secs_f64() * self.rate;
+            self.accumulate(now.duration_since(last));
             self.last_wall = Some(now);
         }
         self.rate = if rate.is_nan() { 0.0 } else { rate.max(0.0) };
+    }
+
+    /// Adds `elapsed` wall time at the current rate to the file time still to play. (No time
+    /// adds nothing, even at an infinite rate, where the product would be NaN and stall the
+    /// replay for good.)
+    fn accumulate(&mut self, elapsed: std::time::Duration) {
+        if !elapsed.is_zero() && self.rate > 0.0 {
+            self.accum += elapsed.as_secs_f64() * self.rate;
+        }
     }
 
     /// The speed factor.
@@ -243,8 +263,12 @@ impl Replay {
     }
 
     /// Asks to play every entry up to `elapsed` seconds after the first message; rewinds first
-    /// when that is before the current file time.
+    /// when that is before the current file time. The target saturates at the ends of
+    /// [`TimeVal`]'s range (`f64::INFINITY` plays to the end); NaN asks for nothing.
     pub fn play_to_time(&mut self, elapsed: f64) {
+        if elapsed.is_nan() {
+            return;
+        }
         let target = self.base_time().plus_secs(elapsed);
         if target < self.file_time {
             self.reset();
@@ -260,8 +284,13 @@ impl Replay {
 
     /// Moves to `elapsed` seconds after the first message without delivering user messages;
     /// the connection feeds the system entries passed over through its id tables, so descriptions
-    /// are not lost (C++ loses them). Returns whether the target lies within the log.
+    /// are not lost (C++ loses them). Returns whether the target lies within the log. The
+    /// target saturates at the ends of [`TimeVal`]'s range (`f64::INFINITY` goes to the end
+    /// and returns false); NaN is refused (false, nothing moves).
     pub fn jump_to_time(&mut self, elapsed: f64) -> bool {
+        if elapsed.is_nan() {
+            return false;
+        }
         let target = self.base_time().plus_secs(elapsed);
         if target < self.file_time || self.eof {
             self.reset();
@@ -307,5 +336,41 @@ impl Replay {
     /// True while entries remain due in this pass.
     pub fn busy(&self) -> bool {
         self.mode != Mode::Idle && !self.eof
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::log::format::encode_entry;
+    use crate::wire::Cookie;
+
+    /// A log of `n` user messages 10 ms apart.
+    fn log(n: i64) -> LogReader {
+        let mut file = Cookie::ours(0).to_bytes().to_vec();
+        let mut buf = [0u8; 64];
+        for i in 0..n {
+            let t = TimeVal::new(100, 0).plus_secs(i as f64 * 0.01);
+            let len = encode_entry(&mut buf, 0, 0, t, &[i as u8; 4]).unwrap();
+            file.extend_from_slice(&buf[..len]);
+        }
+        LogReader::from_bytes(file, "mem.vrpn").unwrap()
+    }
+
+    fn drain(r: &mut Replay) -> usize {
+        std::iter::from_fn(|| r.next_due()).count()
+    }
+
+    #[test]
+    fn an_infinite_rate_and_no_time_passing_do_not_stall_the_clock() {
+        let mut r = Replay::from_reader(log(10));
+        assert_eq!(drain(&mut r), 0, "no leading system entries");
+        let t0 = Instant::now();
+        r.tick(t0); // arms the clock
+        r.set_rate(f64::INFINITY, t0);
+        r.tick(t0); // no time passed: ∞ × 0 must not poison the clock
+        assert_eq!(drain(&mut r), 0);
+        r.tick(t0 + std::time::Duration::from_millis(1));
+        assert_eq!(drain(&mut r), 10);
     }
 }

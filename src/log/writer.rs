@@ -297,12 +297,15 @@ mod tests {
         let bytes = w.finish().unwrap();
         assert_eq!(bytes.len(), 24 + 10_000 * 28);
         let r = LogReader::from_bytes(bytes, "mem").unwrap();
-        for (i, e) in r.entries().enumerate() {
+        let mut entries = r.entries();
+        let mut i = 0i32;
+        while let Some(e) = entries.next_entry() {
             let e = e.unwrap();
-            assert_eq!(e.payload, &(i as i32).to_be_bytes());
-            assert_eq!(e.time(), TimeVal::new(7, i as i64));
+            assert_eq!(e.payload, &i.to_be_bytes());
+            assert_eq!(e.time(), TimeVal::new(7, i64::from(i)));
+            i += 1;
         }
-        assert_eq!(r.entries().count(), 10_000);
+        assert_eq!(r.entries().count_whole(), 10_000);
     }
 
     #[test]
@@ -348,9 +351,9 @@ mod tests {
             );
         }
         let r = LogReader::open(&path).unwrap();
-        let e: Vec<_> = r.entries().map(|e| e.unwrap()).collect();
-        assert_eq!(e.len(), 1);
-        assert_eq!(e[0].type_id(), -5);
+        let mut entries = r.entries();
+        assert_eq!(entries.next_entry().unwrap().unwrap().type_id(), -5);
+        assert!(entries.next_entry().is_none());
         std::fs::remove_file(&path).unwrap();
         let _ = std::fs::remove_dir(&dir);
     }

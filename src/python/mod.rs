@@ -28,11 +28,23 @@ pub(crate) use errors::to_py;
 use crate::time::TimeVal;
 
 /// Seconds since the epoch as a `TimeVal`; `None` is "now" on `conn`'s clock.
-pub(crate) fn time_or_now(time: Option<f64>, conn: &crate::Connection) -> TimeVal {
+pub(crate) fn time_or_now(time: Option<f64>, conn: &crate::Connection) -> PyResult<TimeVal> {
     match time {
-        Some(t) => TimeVal::from_secs_f64(t),
-        None => conn.now().wall,
+        Some(t) => header_time(t),
+        None => Ok(conn.now().wall),
     }
+}
+
+/// Seconds since the epoch as a message time, refusing what a message header cannot carry.
+pub(crate) fn header_time(t: f64) -> PyResult<TimeVal> {
+    TimeVal::checked_from_secs_f64(t)
+        .filter(TimeVal::fits_header)
+        .ok_or_else(|| {
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "time must be between 0 and 4294967295.999999 seconds since 1970 (what a VRPN \
+                 message carries), got {t}"
+            ))
+        })
 }
 
 /// The module: `import vrpn`.

@@ -381,6 +381,15 @@ impl Replay {
     }
 }
 
+/// A position in seconds for `seek` and `play_to`: NaN is refused; anything else saturates at
+/// the ends of the log's time range (`float("inf")` is the end).
+fn not_nan(secs: f64) -> PyResult<f64> {
+    if secs.is_nan() {
+        return Err(PyValueError::new_err("seconds must be a number, got nan"));
+    }
+    Ok(secs)
+}
+
 #[pymethods]
 impl Replay {
     /// Speed: 1.0 real time, 0 paused, 10 ten times faster, float("inf") as fast as possible.
@@ -402,11 +411,13 @@ impl Replay {
     /// Moves to `secs` after the first message without delivering the messages in between.
     /// Returns whether that time is inside the log.
     fn seek(&self, secs: f64) -> PyResult<bool> {
+        let secs = not_nan(secs)?;
         self.with(|r| r.jump_to_time(secs))
     }
 
     /// Delivers, now, every message up to `secs` after the first one.
     fn play_to(&self, secs: f64) -> PyResult<()> {
+        let secs = not_nan(secs)?;
         self.with(|r| r.play_to_time(secs))
     }
 

@@ -361,7 +361,7 @@ impl TrackerServer {
     ) -> PyResult<()> {
         let d = self.dev()?;
         let s = index(sensor, "sensor", Some(d.server.num_sensors()))?;
-        let t = time_or_now(time, d.server.connection());
+        let t = time_or_now(time, d.server.connection())?;
         run(|| d.server.report_pose(s, t, pos, quat))
     }
 
@@ -378,7 +378,7 @@ impl TrackerServer {
     ) -> PyResult<()> {
         let d = self.dev()?;
         let s = index(sensor, "sensor", Some(d.server.num_sensors()))?;
-        let t = time_or_now(time, d.server.connection());
+        let t = time_or_now(time, d.server.connection())?;
         run(|| d.server.report_velocity(s, t, vel, vel_quat, dt))
     }
 
@@ -455,7 +455,7 @@ impl ButtonServer {
     fn report_changes(&self, time: Option<f64>) -> PyResult<()> {
         let d = self.dev()?;
         d.server
-            .set_timestamp(time_or_now(time, d.server.connection()));
+            .set_timestamp(time_or_now(time, d.server.connection())?);
         run(|| d.server.report_changes())
     }
 
@@ -547,7 +547,7 @@ impl AnalogServer {
             }
             s.channels_mut()[..v.len()].copy_from_slice(&v);
         }
-        let t = time_or_now(time, s.connection());
+        let t = time_or_now(time, s.connection())?;
         run(|| s.report(Some(t)))
     }
 
@@ -556,7 +556,7 @@ impl AnalogServer {
     fn report_changes(&self, time: Option<f64>) -> PyResult<bool> {
         let d = self.dev()?;
         let mut s = d.server()?;
-        let t = time_or_now(time, s.connection());
+        let t = time_or_now(time, s.connection())?;
         run(|| s.report_changes(Some(t)))
     }
 
@@ -625,7 +625,7 @@ impl DialServer {
             super::errors::VrpnError::new_err("DialServer called again from its own report")
         })?;
         let i = index(i, "dial", Some(s.num_dials()))?;
-        let t = time_or_now(time, s.connection());
+        let t = time_or_now(time, s.connection())?;
         s.set_timestamp(t);
         s.set_dial(i, revolutions);
         run(|| s.report_changes())
@@ -673,7 +673,7 @@ impl TextSender {
     fn send(&self, text: &str, severity: &str, level: u32, time: Option<f64>) -> PyResult<()> {
         let s = parse_severity(severity)?;
         let d = held(&self.held, "TextSender")?;
-        let t = time.map(crate::TimeVal::from_secs_f64);
+        let t = time.map(super::header_time).transpose()?;
         run(|| d.sender.send_message(text, s, level, t))
     }
 

@@ -20,7 +20,7 @@ use crate::{Connection, Wake};
 ///
 /// [`Waiter`]: crate::Waiter
 pub(crate) fn wait(py: Python<'_>, conn: &Connection, timeout: f64) -> PyResult<bool> {
-    let end = Instant::now() + seconds(timeout)?;
+    let end = crate::time::instant_after(Instant::now(), seconds(timeout)?);
     loop {
         let waiter = conn.prepare_wait(None);
         let left = end.saturating_duration_since(Instant::now());

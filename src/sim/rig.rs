@@ -140,6 +140,12 @@ impl Drop for ServerProcess {
     }
 }
 
+/// Where a [`Client`] reads: a server over TCP, or a connection in this process.
+enum Source<'a> {
+    Tcp(&'a str),
+    Conn(&'a str, &'a crate::Connection),
+}
+
 /// One thing the client heard, in the order heard.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Heard {
@@ -192,18 +198,39 @@ impl Client {
     /// Connects to `name` on the server at 127.0.0.1:`port`, reading `interfaces` and texts.
     pub fn connect(name: &str, port: u16, interfaces: &[Interface]) -> Result<Client, Error> {
         let at = format!("{name}@tcp://127.0.0.1:{port}");
+        Client::build(&Source::Tcp(&at), interfaces)
+    }
+
+    /// Reads `name`'s `interfaces` and texts on `conn` itself (a loopback connection in a
+    /// driver's virtual-line tests, where reports are delivered as they are sent: no pumping
+    /// needed).
+    pub fn on_connection(
+        name: &str,
+        conn: &crate::Connection,
+        interfaces: &[Interface],
+    ) -> Result<Client, Error> {
+        Client::build(&Source::Conn(name, conn), interfaces)
+    }
+
+    fn build(source: &Source<'_>, interfaces: &[Interface]) -> Result<Client, Error> {
         let log: Rc<RefCell<Vec<Heard>>> = Rc::default();
         let mut pump: Vec<Box<dyn Fn() -> Result<(), Error>>> = Vec::new();
         for interface in interfaces {
             let l = log.clone();
             match interface {
                 Interface::Tracker => {
-                    let r = TrackerRemote::new(&at)?;
+                    let r = match source {
+                        Source::Tcp(at) => TrackerRemote::new(at)?,
+                        Source::Conn(name, conn) => TrackerRemote::on_connection(name, conn)?,
+                    };
                     r.on_pose(move |p| l.borrow_mut().push(Heard::Pose(*p)));
                     pump.push(Box::new(move || r.mainloop()));
                 }
                 Interface::Button => {
-                    let r = ButtonRemote::new(&at)?;
+                    let r = match source {
+                        Source::Tcp(at) => ButtonRemote::new(at)?,
+                        Source::Conn(name, conn) => ButtonRemote::on_connection(name, conn)?,
+                    };
                     r.on_change(move |c| {
                         l.borrow_mut().push(Heard::Button {
                             button: c.button,
@@ -214,7 +241,10 @@ impl Client {
                     pump.push(Box::new(move || r.mainloop()));
                 }
                 Interface::Analog => {
-                    let r = AnalogRemote::new(&at)?;
+                    let r = match source {
+                        Source::Tcp(at) => AnalogRemote::new(at)?,
+                        Source::Conn(name, conn) => AnalogRemote::on_connection(name, conn)?,
+                    };
                     r.on_report(move |a| {
                         l.borrow_mut().push(Heard::Analog {
                             channels: a.channel[..a.num_channel].to_vec(),
@@ -224,7 +254,10 @@ impl Client {
                     pump.push(Box::new(move || r.mainloop()));
                 }
                 Interface::Dial => {
-                    let r = DialRemote::new(&at)?;
+                    let r = match source {
+                        Source::Tcp(at) => DialRemote::new(at)?,
+                        Source::Conn(name, conn) => DialRemote::on_connection(name, conn)?,
+                    };
                     r.on_update(move |d| {
                         l.borrow_mut().push(Heard::Dial {
                             dial: d.dial,
@@ -241,7 +274,10 @@ impl Client {
                 }
             }
         }
-        let texts = TextReceiver::new(&at)?;
+        let texts = match source {
+            Source::Tcp(at) => TextReceiver::new(at)?,
+            Source::Conn(name, conn) => TextReceiver::on_connection(name, conn)?,
+        };
         let l = log.clone();
         texts.on_message(move |m| {
             l.borrow_mut().push(Heard::Text {
@@ -251,6 +287,11 @@ impl Client {
         });
         pump.push(Box::new(move || texts.mainloop()));
         Ok(Client { log, pump })
+    }
+
+    /// Forgets everything heard so far.
+    pub fn clear(&self) {
+        self.log.borrow_mut().clear();
     }
 
     /// Everything heard so far, in order.

@@ -15,7 +15,7 @@ use crate::time::Now;
 /// A model with the faults every driver is tested against, whatever the device:
 ///
 /// * garbage put on the line between records ([`junk`](Self::junk)): a piece goes out only
-///   after [`IDLE`](Self::IDLE) without output from the model and at most one per
+///   after [`idle`](Self::idle) without output from the model and at most one per
 ///   [`APART`](Self::APART), so it falls between records, never inside one, and the driver
 ///   must lose no record to it;
 /// * silence ([`mute`](Self::mute)): the device hears everything and answers as usual, but
@@ -29,12 +29,15 @@ pub struct Noisy<M> {
     pub injected: usize,
     /// While true, the device's output is lost.
     pub mute: bool,
+    /// Silence that marks a gap between records ([`IDLE`](Self::IDLE) unless set): longer
+    /// than the time between two bytes of a record.
+    pub idle: Duration,
     last_out: Option<Instant>,
     last_junk: Option<Instant>,
 }
 
 impl<M> Noisy<M> {
-    /// Far longer than the gaps inside a record (a byte every < 1 ms at 9600 baud and up).
+    /// Far longer than the gaps inside a record at 9600 baud and up (a byte every < 1 ms).
     pub const IDLE: Duration = Duration::from_millis(2);
     /// At most one piece of garbage per this time.
     pub const APART: Duration = Duration::from_millis(40);
@@ -46,6 +49,7 @@ impl<M> Noisy<M> {
             junk: Vec::new(),
             injected: 0,
             mute: false,
+            idle: Self::IDLE,
             last_out: None,
             last_junk: None,
         }
@@ -76,7 +80,7 @@ impl<M: DeviceModel> DeviceModel for Noisy<M> {
             self.last_out = Some(now.mono);
             return;
         }
-        let idle = self.last_out.is_some_and(|t| now.mono >= t + Self::IDLE);
+        let idle = self.last_out.is_some_and(|t| now.mono >= t + self.idle);
         let apart = self.last_junk.map_or(true, |t| now.mono >= t + Self::APART);
         if idle && apart && !self.junk.is_empty() {
             out.extend_from_slice(&self.junk.remove(0));
@@ -220,6 +224,12 @@ impl<M: DeviceModel + 'static> SimulatedDevice<M> {
     pub fn inject_between_records(&self, junk: &[&[u8]]) {
         let junk: Vec<Vec<u8>> = junk.iter().map(|j| j.to_vec()).collect();
         self.with(move |d| d.model.junk.extend(junk));
+    }
+
+    /// Sets the silence that marks a gap between records on the (first) line, for slow lines
+    /// whose bytes come further apart than [`Noisy::IDLE`].
+    pub fn set_junk_idle(&self, idle: Duration) {
+        self.with(move |d| d.model.idle = idle);
     }
 
     /// Pieces of garbage put on the (first) line so far.

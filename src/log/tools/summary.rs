@@ -85,7 +85,7 @@ pub struct Summary {
     /// The file.
     pub path: PathBuf,
     /// File size in bytes.
-    pub file_len: usize,
+    pub file_len: u64,
     /// Cookie version text, e.g. `07.38`.
     pub cookie_version: String,
     /// The cookie's log-mode digit.
@@ -117,7 +117,7 @@ impl Summary {
     pub fn compute(reader: &LogReader) -> Summary {
         let mut s = Summary {
             path: reader.path().to_owned(),
-            file_len: reader.bytes().len(),
+            file_len: reader.len(),
             cookie_version: reader.cookie().version(),
             cookie_log_mode: reader.cookie().log_mode,
             entries: 0,

@@ -98,7 +98,13 @@ mod tests {
             lines[5],
             format!(
                 "{:>8}  10.000000  Tracker0  vrpn_Tracker Pos_Quat  sensor 0  pos (0.1, 0.5, -1)  quat (0, 0, 0, 1)",
-                r.entries().nth(5).unwrap().unwrap().offset
+                {
+                    let mut it = r.entries();
+                    for _ in 0..5 {
+                        it.next_entry();
+                    }
+                    it.offset()
+                }
             )
         );
         assert!(lines[11].ends_with("<type 99>  len 2  hex dead"));

@@ -49,8 +49,9 @@ impl Record<'_, '_> {
 
 /// Walks a log's entries in file order, keeping the name tables up to date.
 ///
-/// A lending iterator: each [`Record`] borrows the walk's names until the next call.
-#[derive(Clone, Debug)]
+/// A lending iterator: each [`Record`] borrows the walk (its names and its window onto the
+/// file) until the next call.
+#[derive(Debug)]
 pub struct Walk<'a> {
     entries: Entries<'a>,
     names: NameTable,
@@ -66,8 +67,8 @@ impl<'a> Walk<'a> {
     }
 
     /// The next entry, or the error that ends the walk (then `None`).
-    pub fn next_record(&mut self) -> Option<Result<Record<'_, 'a>, LogError>> {
-        let entry = match self.entries.next()? {
+    pub fn next_record(&mut self) -> Option<Result<Record<'_, '_>, LogError>> {
+        let entry = match self.entries.next_entry()? {
             Ok(e) => e,
             Err(e) => return Some(Err(e)),
         };

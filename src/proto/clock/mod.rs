@@ -63,13 +63,25 @@
 //!   are ignored ([`ReplyOutcome::Unmatched`]). A query unanswered after `max_round_trip` is
 //!   forgotten: a lost reply costs nothing but that sample.
 //! * A negative round trip or a peer whose `t3` precedes its `t2` is impossible and discarded
-//!   ([`ReplyOutcome::Absurd`]); a round trip over `max_round_trip` is useless and discarded
-//!   ([`ReplyOutcome::TooSlow`]).
+//!   ([`ReplyOutcome::Absurd`]), as is a peer time outside what a VRPN header carries (1970 to
+//!   2106) and an offset beyond `max_offset`; a round trip over `max_round_trip` is useless and
+//!   discarded ([`ReplyOutcome::TooSlow`]).
 //! * A sample that contradicts the estimate (the two intervals do not overlap) means a clock was
-//!   stepped, or the drift changed. The first one is held aside ([`ReplyOutcome::Held`]); if
-//!   the next is also contradictory and agrees with the held one, the history restarts from
-//!   those two and a quick round follows ([`ReplyOutcome::ClockStepped`]). A slower change of
-//!   drift makes old pairs disagree; the oldest samples are then dropped until the rest agree.
+//!   stepped, or the drift changed — or a peer is lying. It is held aside
+//!   ([`ReplyOutcome::Held`]); only when `step_samples` (3) contradicting samples in a row agree
+//!   with each other does the history restart from them ([`ReplyOutcome::ClockStepped`]). Any
+//!   sample that fits the estimate in between discards those held. A slower change of drift
+//!   makes old pairs disagree; the oldest samples are then dropped until the rest agree.
+//! * The query rate does not depend on what replies say: rounds follow the schedule above, and
+//!   the quick round after a clock step (or a reconnection) is skipped when another started
+//!   within [`QUICK_ROUND_GAP`] (a reconnection then gets a plain round). With the defaults no
+//!   peer gets more than 8 + 13 queries a minute.
+//! * Offsets are kept as whole microseconds plus a fraction, and fitted relative to the newest
+//!   sample, so the estimate's precision never depends on the first reply of a connection.
+//!
+//! The bound holds for an honest peer. A lying one can move the estimate anywhere within
+//! `max_offset` (it is the only witness of its own clock), but no faster than one step per
+//! `step_samples` replies, and it cannot change the query rate or the estimate's precision.
 //! * A peer that never answers (a C++ 07.x peer ignores these messages) never puts sync in
 //!   effect, and remote timestamps pass through unchanged. While no reply has come on the
 //!   connection the gap between rounds doubles from `resync_interval` up to
@@ -89,6 +101,14 @@ use std::time::{Duration, Instant};
 
 use crate::time::{Now, TimeVal};
 pub use crate::wire::payload::clock::{Query, Reply};
+#[cfg(test)]
+use estimator::drift_bounds;
+use estimator::Sample;
+use translation::{micros, to_timeval};
+pub use translation::{Translation, TRANSLATION_REUSE};
+
+mod estimator;
+mod translation;
 
 /// Most rounds a [`ClockSync`] keeps (the upper limit of [`ClockSyncConfig::window`]).
 pub const MAX_WINDOW: usize = 64;
@@ -102,6 +122,16 @@ const TIMESTAMP_ERROR: f64 = 2e-6;
 
 /// Samples closer in time than this (seconds) bound the drift too loosely to be worth a pair.
 const MIN_PAIR_SPAN: f64 = 1e-3;
+
+/// Most contradicting samples a clock step may be required to gather (the upper limit of
+/// [`ClockSyncConfig::step_samples`]).
+pub const MAX_STEP_SAMPLES: usize = 8;
+
+/// Shortest gap between two quick rounds, whatever happens: a clock step (or a reconnection)
+/// sooner after the last quick round gets no quick round of its own (a reconnection gets a
+/// plain round), so no peer can make us query faster than `quick_queries` a minute on top of
+/// the regular rounds.
+pub const QUICK_ROUND_GAP: Duration = Duration::from_secs(60);
 
 /// Tuning of a [`ClockSync`]. [`Default`] gives the values documented on each field.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,6 +160,15 @@ pub struct ClockSyncConfig {
     /// How much the rate difference may change over the window, in ppm (default 1): added to
     /// the drift error so temperature and time daemons' slewing stay inside the bound.
     pub wander_ppm: f64,
+    /// Largest offset believed (default 2^32 s, all that VRPN's 32-bit header seconds can
+    /// span): a reply implying a larger one is discarded as [`ReplyOutcome::Absurd`]. Where
+    /// the clocks are known to be disciplined, a smaller value limits how far a lying peer can
+    /// move translated times. Capped at 2^62 µs.
+    pub max_offset: Duration,
+    /// Contradicting samples in a row, agreeing with each other, that it takes to accept that
+    /// a clock stepped (default 3; 2..=[`MAX_STEP_SAMPLES`]). Until then the estimate stands,
+    /// so a peer whose replies jump back and forth cannot make it follow them.
+    pub step_samples: u32,
 }
 
 impl Default for ClockSyncConfig {
@@ -145,6 +184,8 @@ impl Default for ClockSyncConfig {
             max_silent_interval: Duration::from_secs(60),
             max_skew_ppm: 500.0,
             wander_ppm: 1.0,
+            max_offset: Duration::from_secs(1 << 32),
+            step_samples: 3,
         }
     }
 }
@@ -173,6 +214,10 @@ impl ClockSyncConfig {
             max_silent_interval: self.max_silent_interval.max(resync_interval),
             max_skew_ppm: ppm(self.max_skew_ppm, d.max_skew_ppm),
             wander_ppm: ppm(self.wander_ppm, d.wander_ppm),
+            max_offset: self
+                .max_offset
+                .min(Duration::from_micros(crate::time::MAX_MICROS as u64)),
+            step_samples: self.step_samples.clamp(2, MAX_STEP_SAMPLES as u32),
         }
     }
 }
@@ -205,13 +250,16 @@ pub enum ReplyOutcome {
     Used,
     /// A valid exchange that contradicts the estimate: held aside as a possible clock step.
     Held,
-    /// A second contradictory exchange agreeing with the held one: a clock was stepped; the
-    /// history restarted from the two and a quick round is due.
+    /// The `step_samples`-th contradictory exchange in a row, agreeing with those held: a
+    /// clock was stepped; the history restarted from them and a quick round is due (unless
+    /// one ran within [`QUICK_ROUND_GAP`]).
     ClockStepped,
     /// No outstanding query has this id and `t1`: a duplicate, a reply to a forgotten query
     /// or to another querier, or any reply while disconnected.
     Unmatched,
-    /// Impossible timestamps (negative round trip, the peer's `t3` before its `t2`).
+    /// Impossible or implausible timestamps: a negative round trip, the peer's `t3` before
+    /// its `t2`, a peer time a VRPN header cannot carry (before 1970, from 2106), an offset
+    /// beyond `max_offset`.
     Absurd,
     /// Round trip over `max_round_trip`.
     TooSlow,
@@ -233,22 +281,6 @@ pub struct ClockSyncStats {
     pub replies_discarded: u64,
     /// Clock steps detected ([`ReplyOutcome::ClockStepped`]).
     pub clock_steps: u64,
-}
-
-/// One exchange, reduced to what the estimator needs. Times are seconds on the local monotonic
-/// clock since [`ClockSync`] was made; offsets are seconds relative to `ClockSync::base_us`.
-#[derive(Clone, Copy, Debug, Default)]
-struct Sample {
-    /// Middle of the exchange (`t1` + half the local interval).
-    at: f64,
-    /// Measured offset.
-    offset: f64,
-    /// The true offset at `at` is within `offset ± radius`.
-    radius: f64,
-    /// Round trip.
-    round_trip: f64,
-    /// Round the query belonged to.
-    round: u32,
 }
 
 /// A query sent and not yet answered.
@@ -289,8 +321,12 @@ pub struct ClockSync {
     anchor: usize,
     /// When the last valid sample was taken into the history.
     last_used: f64,
-    /// A contradictory sample waiting for confirmation of a clock step.
-    suspect: Option<Sample>,
+    /// Contradicting samples in a row that agree with each other: a clock step once there
+    /// are `step_samples` of them.
+    suspects: [Sample; MAX_STEP_SAMPLES],
+    suspects_len: usize,
+    /// When the last quick round started (it survives reconnections: see [`QUICK_ROUND_GAP`]).
+    last_quick_round: Option<Instant>,
     stats: ClockSyncStats,
 }
 
@@ -322,7 +358,9 @@ impl ClockSync {
             drift_error: 0.0,
             anchor: 0,
             last_used: 0.0,
-            suspect: None,
+            suspects: [Sample::default(); MAX_STEP_SAMPLES],
+            suspects_len: 0,
+            last_quick_round: None,
             stats: ClockSyncStats::default(),
         };
         sync.on_connected(now);
@@ -345,7 +383,11 @@ impl ClockSync {
         self.connected = true;
         self.answered = false;
         self.silent_rounds = 0;
-        self.start_quick_round(now.mono);
+        if self.quick_round_allowed(now.mono) {
+            self.start_quick_round(now.mono);
+        } else {
+            self.start_plain_round(now.mono);
+        }
     }
 
     /// The connection dropped: forget the peer's clock and send nothing until
@@ -543,12 +585,28 @@ impl ClockSync {
         self.anchor = 0;
         self.drift = 0.0;
         self.drift_error = 0.0;
-        self.suspect = None;
+        self.suspects_len = 0;
     }
 
-    fn start_quick_round(&mut self, at: Instant) {
+    /// Whether a quick round may start at `at` ([`QUICK_ROUND_GAP`] since the last one).
+    pub(super) fn quick_round_allowed(&self, at: Instant) -> bool {
+        self.last_quick_round.map_or(true, |last| {
+            at.saturating_duration_since(last) >= QUICK_ROUND_GAP
+        })
+    }
+
+    pub(super) fn start_quick_round(&mut self, at: Instant) {
+        self.last_quick_round = Some(at);
+        self.start_round(at, self.config.quick_queries);
+    }
+
+    fn start_plain_round(&mut self, at: Instant) {
+        self.start_round(at, self.config.resync_queries);
+    }
+
+    fn start_round(&mut self, at: Instant, queries: u32) {
         self.round = self.round.wrapping_add(1);
-        self.round_left = self.config.quick_queries;
+        self.round_left = queries;
         self.next_send = Some(at);
     }
 
@@ -592,263 +650,6 @@ impl ClockSync {
             }
         }
     }
-
-    /// Turns a matched reply into a sample, or says why it is unusable.
-    fn measure(&mut self, query: &Pending, reply: &Reply, t4: Now) -> Result<Sample, ReplyOutcome> {
-        let local = t4
-            .mono
-            .checked_duration_since(query.sent.mono)
-            .ok_or(ReplyOutcome::Absurd)?
-            .as_secs_f64();
-        let t1 = micros(query.sent.wall);
-        let t2 = micros(reply.query_received);
-        let t3 = micros(reply.reply_sent);
-        if t3 < t2 {
-            return Err(ReplyOutcome::Absurd);
-        }
-        let round_trip = local - (t3 - t2) as f64 * 1e-6;
-        if round_trip < -TIMESTAMP_ERROR {
-            return Err(ReplyOutcome::Absurd);
-        }
-        let max = self.config.max_round_trip.as_secs_f64();
-        if round_trip > max || local > max {
-            return Err(ReplyOutcome::TooSlow);
-        }
-        let round_trip = round_trip.max(0.0);
-        // offset = ((t2 − t1) + (t3 − t4)) / 2 with t4 = t1 + local; the integer part exactly.
-        let twice = (t2 - t1) + (t3 - t1);
-        if self.len == 0 && self.suspect.is_none() {
-            self.base_us = i64::try_from(twice / 2).map_err(|_| ReplyOutcome::Absurd)?;
-        }
-        let relative = (twice - 2 * self.base_us as i128) as f64 * 0.5e-6 - local / 2.0;
-        let skew = self.config.max_skew_ppm * 1e-6;
-        Ok(Sample {
-            at: self.secs(query.sent.mono) + local / 2.0,
-            offset: relative,
-            radius: round_trip / 2.0 + TIMESTAMP_ERROR + skew * local,
-            round_trip,
-            round: query.round,
-        })
-    }
-
-    /// Takes a valid sample into the estimate (or holds it as a suspected clock step).
-    fn add(&mut self, sample: Sample, now: Instant) -> ReplyOutcome {
-        if self.len > 0 {
-            let (offset, uncertainty) = self.predict_at(sample.at);
-            if (sample.offset - offset).abs() > uncertainty + sample.radius {
-                return match self.suspect.take() {
-                    Some(held) if self.agree(&held, &sample) => {
-                        self.len = 0;
-                        self.insert(held);
-                        self.insert(sample);
-                        self.refit();
-                        self.last_used = held.at.max(sample.at);
-                        self.stats.clock_steps += 1;
-                        self.start_quick_round(now);
-                        ReplyOutcome::ClockStepped
-                    }
-                    _ => {
-                        self.suspect = Some(sample);
-                        ReplyOutcome::Held
-                    }
-                };
-            }
-        }
-        self.suspect = None;
-        self.insert(sample);
-        self.refit();
-        self.last_used = self.last_used.max(sample.at);
-        ReplyOutcome::Used
-    }
-
-    /// The anchor's prediction at `t`, ignoring staleness.
-    fn predict_at(&self, t: f64) -> (f64, f64) {
-        let a = &self.history[self.anchor];
-        let dt = t - a.at;
-        (
-            a.offset + self.drift * dt,
-            a.radius + self.drift_error * dt.abs(),
-        )
-    }
-
-    /// Whether two samples can both hold under the largest allowed drift.
-    fn agree(&self, a: &Sample, b: &Sample) -> bool {
-        let skew = self.config.max_skew_ppm * 1e-6;
-        (a.offset - b.offset).abs() <= a.radius + b.radius + skew * (a.at - b.at).abs()
-    }
-
-    /// Adds `sample` as its round's best (replacing a worse one), evicting the oldest round
-    /// when the window is full. A late sample of a round older than the newest kept is dropped.
-    fn insert(&mut self, sample: Sample) {
-        if self.len > 0 {
-            let last = &mut self.history[self.len - 1];
-            let newer = sample.round.wrapping_sub(last.round) as i32;
-            if newer == 0 {
-                if sample.radius < last.radius {
-                    *last = sample;
-                }
-                return;
-            }
-            if newer < 0 {
-                return;
-            }
-        }
-        if self.len == self.config.window {
-            self.history.copy_within(1..self.len, 0);
-            self.len -= 1;
-        }
-        self.history[self.len] = sample;
-        self.len += 1;
-    }
-
-    /// Recomputes the drift interval from every pair of kept samples, dropping the oldest
-    /// samples while they contradict the newer ones, and picks the anchor.
-    fn refit(&mut self) {
-        if self.len == 0 {
-            return;
-        }
-        let skew = self.config.max_skew_ppm * 1e-6;
-        let (mut low, mut high) = (-skew, skew);
-        let mut keep_from = self.len - 1;
-        for j in (0..self.len - 1).rev() {
-            let (mut l, mut h) = (low, high);
-            for k in j + 1..self.len {
-                if let Some((pl, ph)) = drift_bounds(&self.history[j], &self.history[k]) {
-                    l = l.max(pl);
-                    h = h.min(ph);
-                }
-            }
-            if l > h {
-                break;
-            }
-            (low, high, keep_from) = (l, h, j);
-        }
-        if keep_from > 0 {
-            self.history.copy_within(keep_from..self.len, 0);
-            self.len -= keep_from;
-        }
-        self.drift = (low + high) / 2.0;
-        self.drift_error = (high - low) / 2.0 + self.config.wander_ppm * 1e-6;
-        // Every sample's uncertainty grows at the same rate after it, so the smallest at any
-        // later time is the smallest `radius − drift_error × at`.
-        let e = self.drift_error;
-        self.anchor = (0..self.len)
-            .min_by(|&x, &y| {
-                let (a, b) = (&self.history[x], &self.history[y]);
-                (a.radius - e * a.at).total_cmp(&(b.radius - e * b.at))
-            })
-            .unwrap_or(0);
-    }
-}
-
-/// The drift interval two samples allow, or `None` if they are too close in time to say much.
-fn drift_bounds(a: &Sample, b: &Sample) -> Option<(f64, f64)> {
-    let (early, late) = if a.at <= b.at { (a, b) } else { (b, a) };
-    let span = late.at - early.at;
-    if span < MIN_PAIR_SPAN {
-        return None;
-    }
-    let change = late.offset - early.offset;
-    let slack = late.radius + early.radius;
-    Some(((change - slack) / span, (change + slack) / span))
-}
-
-/// A time value as microseconds, wide enough that no sum or difference overflows.
-fn micros(t: TimeVal) -> i128 {
-    t.sec as i128 * 1_000_000 + t.usec as i128
-}
-
-/// How long a [`Translation`] may be reused before it is worked out again (see
-/// [`ClockSync::translation_until`]).
-pub const TRANSLATION_REUSE: Duration = Duration::from_millis(250);
-
-/// Peer-to-local time translation fixed at one moment (see [`ClockSync::translation`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Translation {
-    /// The offset at that moment, in microseconds, and split into seconds and microseconds
-    /// (0..1_000_000) so that translating needs no division.
-    offset_us: i64,
-    offset_sec: i64,
-    offset_usec: i64,
-    /// That moment on the local wall clock, in microseconds.
-    now_us: i64,
-    /// Drift of the offset, seconds per second.
-    drift: f64,
-    /// Timestamps at most this many microseconds old (or ahead) move by less than half a
-    /// microsecond of drift, so they skip the floating-point step (which for a live stream,
-    /// whose timestamps are fresh, is nearly always).
-    drift_free_age_us: i64,
-}
-
-impl Translation {
-    fn new(offset_us: i64, now_us: i64, drift: f64) -> Translation {
-        // |drift × age| < 0.5 for every |age| ≤ 0.5 / |drift|; the margin keeps the
-        // floating-point product (relative error ~1e-16) below one half as well.
-        let drift_free_age_us = if drift == 0.0 {
-            i64::MAX
-        } else {
-            (0.5 / drift.abs() * (1.0 - 1e-9)).min(i64::MAX as f64 / 2.0) as i64
-        };
-        Translation {
-            offset_us,
-            offset_sec: offset_us.div_euclid(1_000_000),
-            offset_usec: offset_us.rem_euclid(1_000_000),
-            now_us,
-            drift,
-            drift_free_age_us,
-        }
-    }
-
-    /// The local time of a peer timestamp: `remote − offset`, the offset taken at the moment
-    /// the timestamp refers to (drift applied over its age).
-    ///
-    /// This runs for every message from a synchronised peer, so it avoids divisions and the
-    /// library call behind `f64::round` (halves round away from zero, as `round` does).
-    #[inline]
-    pub fn remote_to_local(&self, remote: TimeVal) -> TimeVal {
-        let remote_us = remote
-            .sec
-            .saturating_mul(1_000_000)
-            .saturating_add(remote.usec);
-        let age = self
-            .now_us
-            .saturating_sub(remote_us.saturating_sub(self.offset_us));
-        // The offset was smaller by drift × age when the timestamp was taken.
-        let back = if age.unsigned_abs() <= self.drift_free_age_us as u64 {
-            0
-        } else {
-            drift_back(self.drift, age)
-        };
-        let usec = remote.usec - self.offset_usec + back;
-        let sec = remote.sec.saturating_sub(self.offset_sec);
-        if (0..1_000_000).contains(&usec) {
-            TimeVal { sec, usec }
-        } else if (-1_000_000..0).contains(&usec) {
-            TimeVal {
-                sec: sec.saturating_sub(1),
-                usec: usec + 1_000_000,
-            }
-        } else {
-            TimeVal::from_micros(sec.saturating_mul(1_000_000).saturating_add(usec))
-        }
-    }
-}
-
-/// `drift × age` rounded to whole microseconds (halves away from zero, as `f64::round`,
-/// without its library call).
-fn drift_back(drift: f64, age_us: i64) -> i64 {
-    let back = drift * age_us as f64;
-    if back >= 0.0 {
-        (back + 0.5) as i64
-    } else {
-        (back - 0.5) as i64
-    }
-}
-
-/// Microseconds back to a time value, saturating at what `i64` microseconds hold.
-fn to_timeval(us: i128) -> TimeVal {
-    let us = us.clamp(i64::MIN as i128 / 2, i64::MAX as i128 / 2) as i64;
-    TimeVal::from_micros(us)
 }
 
 #[cfg(test)]

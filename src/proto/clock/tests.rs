@@ -208,6 +208,8 @@ fn disconnection_forgets_the_peer_and_reconnection_starts_over() {
         ReplyOutcome::Unmatched
     );
 
+    // Back 2 s after the first quick round: a plain round (one query) at once, no second
+    // quick round within a minute.
     let back = after(t0, 2_000_000);
     sync.on_connected(back);
     assert_eq!(sync.next_deadline(), Some(back.mono));
@@ -215,11 +217,21 @@ fn disconnection_forgets_the_peer_and_reconnection_starts_over() {
     assert_eq!(q3.id, q2.id.wrapping_add(1), "ids keep counting");
     assert_eq!(
         sync.next_deadline(),
-        Some(back.mono + Duration::from_millis(20))
+        Some(back.mono + Duration::from_secs(5))
     );
     assert!(!sync.in_effect(back));
     sync.handle_reply(&reply(&q3, 200, 10), after(back, 1_000));
     assert_eq!(sync.estimate(after(back, 1_000)).unwrap().samples, 1);
+
+    // A minute after the last quick round a reconnection gets a quick round again.
+    sync.on_disconnected();
+    let later = after(t0, 60_000_000);
+    sync.on_connected(later);
+    assert!(sync.poll_query(later).is_some());
+    assert_eq!(
+        sync.next_deadline(),
+        Some(later.mono + Duration::from_millis(20))
+    );
 }
 
 #[test]
@@ -469,4 +481,92 @@ fn a_clock_pass_reuses_the_last_translation_only_for_the_same_timestamp() {
         last: None,
     };
     assert_eq!(off.translate(frame), frame);
+}
+
+#[test]
+fn offsets_beyond_max_offset_and_peer_times_a_header_cannot_carry_are_absurd() {
+    let config = ClockSyncConfig {
+        max_offset: Duration::from_secs(60),
+        ..ClockSyncConfig::default()
+    };
+    let t0 = start();
+    let mut sync = ClockSync::new(config, t0);
+    // The peer is 100 s ahead: more than the 60 s this deployment believes.
+    let q = sync.poll_query(t0).unwrap();
+    assert_eq!(
+        sync.handle_reply(&reply(&q, 200, 10), after(t0, 1_000)),
+        ReplyOutcome::Absurd
+    );
+    // With the default bound it is fine; a peer reading 2106 or 1969 is not.
+    let mut sync = ClockSync::new(ClockSyncConfig::default(), t0);
+    let mut now = t0;
+    for (peer_us, outcome) in [
+        ((1i64 << 32) * 1_000_000, ReplyOutcome::Absurd),
+        (-1, ReplyOutcome::Absurd),
+        (0, ReplyOutcome::Used),
+    ] {
+        let q = sync.poll_query(now).unwrap();
+        let at = TimeVal::from_micros(peer_us);
+        let r = Reply::answer(&q, at, at);
+        assert_eq!(sync.handle_reply(&r, after(now, 100)), outcome, "{peer_us}");
+        now = after(now, 20_000);
+    }
+    assert_eq!(
+        ClockSyncConfig {
+            max_offset: Duration::MAX,
+            step_samples: 100,
+            ..ClockSyncConfig::default()
+        }
+        .normalised(),
+        ClockSyncConfig {
+            max_offset: Duration::from_micros(crate::time::MAX_MICROS as u64),
+            step_samples: MAX_STEP_SAMPLES as u32,
+            ..ClockSyncConfig::default()
+        }
+    );
+}
+
+/// A step needs `step_samples` contradicting replies in a row that agree with each other; one
+/// that fits the estimate in between discards those held.
+#[test]
+fn a_step_needs_agreeing_contradictions_in_a_row() {
+    let config = ClockSyncConfig {
+        quick_queries: 1,
+        ..ClockSyncConfig::default()
+    };
+    let t0 = start();
+    let mut sync = ClockSync::new(config, t0);
+    let mut now = t0;
+    let mut exchange = |sync: &mut ClockSync, shift_us: i64| {
+        now = after(now, 5_000_000);
+        let q = sync.poll_query(now).unwrap();
+        let r = reply(&q, 200, 10);
+        let moved = |t: TimeVal| TimeVal::from_micros(t.as_micros() + shift_us);
+        let r = Reply::answer(&q, moved(r.query_received), moved(r.reply_sent));
+        sync.handle_reply(&r, after(now, 400))
+    };
+    assert_eq!(exchange(&mut sync, 0), ReplyOutcome::Used);
+    assert_eq!(exchange(&mut sync, 2_000_000), ReplyOutcome::Held);
+    assert_eq!(
+        exchange(&mut sync, 0),
+        ReplyOutcome::Used,
+        "fits: the held one goes"
+    );
+    assert_eq!(exchange(&mut sync, 2_000_000), ReplyOutcome::Held);
+    assert_eq!(
+        exchange(&mut sync, -2_000_000),
+        ReplyOutcome::Held,
+        "disagrees: restarts"
+    );
+    assert_eq!(
+        exchange(&mut sync, 2_000_000),
+        ReplyOutcome::Held,
+        "restarts again"
+    );
+    assert_eq!(exchange(&mut sync, 2_000_000), ReplyOutcome::Held);
+    assert_eq!(exchange(&mut sync, 2_000_000), ReplyOutcome::ClockStepped);
+    let e = sync.estimate(now).unwrap();
+    assert!((e.offset - 102.0).abs() < 1e-5, "{e:?}");
+    assert_eq!(e.samples, 3);
+    assert_eq!(sync.stats().clock_steps, 1);
 }

@@ -38,7 +38,10 @@
 //!
 //! * every numeric token must be a complete number of the right kind, and finite;
 //! * counts and indexes are range-checked (see each device's docs) instead of clamped;
-//! * rates of the example devices must be greater than 0 (C++ accepts 0 and then never reports);
+//! * rates of the example devices must be greater than 0 (C++ accepts 0 and then never reports),
+//!   and every rate must be at least 1e-9 per second and every period at most 10^9 s
+//!   ([`crate::time::MAX_PERIOD`], about 31.7 years): beyond, C++ computes a schedule that
+//!   overflows, and an earlier version of this server panicked;
 //! * serial baud rates must be one of [`BAUD_RATES`] (C++ would parse, then fail to open);
 //! * device names must be at most [`crate::wire::MAX_NAME_LEN`] bytes and contain no `@`;
 //! * references to other devices must be `*name` (this server) or `name@host` (another one);
