@@ -32,18 +32,31 @@ fn sent(sim: &SimulatedDevice<InertiaSim>) -> (Vec<Value>, Vec<Instant>) {
     })
 }
 
+/// What the client heard from `from` on: every Analog report and every button change (the
+/// states a server sends a client when it connects are not changes).
 fn heard(client: &Client, from: usize) -> (Vec<Value>, Vec<TimeVal>) {
+    let mut state = [false; 2];
     client
-        .reports_from(from)
+        .heard()
         .into_iter()
-        .filter_map(|h| match h {
-            Heard::Analog { channels, time } => Some((Value::Analog(channels), time)),
-            Heard::Button {
-                button,
-                pressed,
-                time,
-            } => Some((Value::Button(button, pressed), time)),
-            _ => None,
+        .enumerate()
+        .filter_map(|(i, h)| {
+            let v = match h {
+                Heard::Analog { channels, time } => Some((Value::Analog(channels), time)),
+                Heard::Button {
+                    button,
+                    pressed,
+                    time,
+                } => {
+                    let changed = state.get(button).is_some_and(|&s| s != pressed);
+                    if let Some(s) = state.get_mut(button) {
+                        *s = pressed;
+                    }
+                    changed.then_some((Value::Button(button, pressed), time))
+                }
+                _ => None,
+            };
+            v.filter(|_| i >= from)
         })
         .unzip()
 }
@@ -66,6 +79,7 @@ fn inertia_mouse_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("inertiamouse", || {
         let mut cfg = SimConfig::new(115_200);
         cfg.keep_log = true;
+        cfg.wait_for_host = true;
         InertiaSim::new(cfg)
     })
     .unwrap();

@@ -27,6 +27,10 @@ pub struct SimConfig {
     pub period: Duration,
     /// A `B` record after every this many `D` records.
     pub button_every: u64,
+    /// Sends nothing until the host sets the line's speed (on a pseudo-terminal: opens the
+    /// port), so that the driver sees the first record: the filters make every later value
+    /// depend on all the records before it.
+    pub wait_for_host: bool,
     /// Log what a client must receive.
     pub keep_log: bool,
 }
@@ -39,6 +43,7 @@ impl SimConfig {
             baud,
             period: Duration::from_millis(10),
             button_every: 25,
+            wait_for_host: false,
             keep_log: false,
         }
     }
@@ -82,6 +87,7 @@ pub struct InertiaSim {
     state: MouseState,
     reported: [f64; CHANNELS],
     sent: Vec<Sent>,
+    host_seen: bool,
 }
 
 impl InertiaSim {
@@ -97,6 +103,7 @@ impl InertiaSim {
             state: MouseState::default(),
             reported: [0.0; CHANNELS],
             sent: Vec::new(),
+            host_seen: false,
         }
     }
 
@@ -141,7 +148,14 @@ impl InertiaSim {
 impl DeviceModel for InertiaSim {
     fn receive(&mut self, _bytes: &[u8], _now: Now) {}
 
+    fn set_baud(&mut self, _baud: u32, _now: Now) {
+        self.host_seen = true;
+    }
+
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
+        if self.cfg.wait_for_host && !self.host_seen {
+            return;
+        }
         let period = self.cfg.period.max(self.byte_time() * 40);
         let next = *self.next.get_or_insert(now.mono);
         if next <= now.mono {
