@@ -10,14 +10,18 @@
 
 use crate::driver::Driver;
 
+pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod glove5dt;
+pub mod glove5dt16;
 pub mod glove5dt_usb;
 pub mod gps;
 #[cfg(test)]
@@ -35,14 +39,18 @@ pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod spaceball;
 pub mod spacemouse;
+pub mod streaming_arduino;
 pub mod threespace;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
+pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
 /// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
@@ -71,12 +79,14 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    &one_euro::DRIVER,
     // Relays of other servers' devices.
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
+    &dtrack::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
@@ -85,7 +95,13 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &biosciences::DRIVER,
+    &glove5dt16::DRIVER,
+    &glove5dt::DRIVER,
     &orb::DRIVER,
+    &spaceball::DRIVER,
+    &streaming_arduino::DRIVER,
+    &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
     &threespace::DRIVER,
@@ -101,4 +117,16 @@ pub static REGISTRY: &[&Driver] = &[
     &hid_trackers::DRIVER,
     &evdev::DRIVER,
     &hid_generic::DRIVER,
+];
+
+/// The simulators `vrpn_device_sim` can run (the `sim` feature): a driver with a simulator
+/// adds its `sim::SIMULATOR` here.
+#[cfg(feature = "sim")]
+pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &cerealbox::sim::SIMULATOR,
+    &dyna::sim::SIMULATOR,
+    &fastrak::sim::SIMULATOR,
+    &flock::sim::SIMULATOR,
+    &joylin::sim::SIMULATOR,
+    &magellan::sim::SIMULATOR,
 ];

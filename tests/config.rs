@@ -259,12 +259,24 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
+            "vrpn_Spaceball",
+            "vrpn_5dt",
+            "vrpn_5dt",
+            "vrpn_5dt16",
+            "vrpn_Streaming_Arduino",
+            "vrpn_Zaber",
+            "vrpn_BiosciencesTools",
             "vrpn_CerealBox",
             "vrpn_Tracker_Dyna",
             "vrpn_Wanda",
             "vrpn_Button_PinchGlove",
             "vrpn_Joystick",
-            "vrpn_ImmersionBox"
+            "vrpn_ImmersionBox",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_FilterOneEuro"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
