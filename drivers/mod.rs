@@ -32,7 +32,10 @@ pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
 pub mod pinchglove;
+pub mod python;
+pub mod radamec;
 pub mod spacemouse;
+pub mod tng3;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
@@ -75,6 +78,9 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &magellan::DRIVER,
     &pinchglove::DRIVER,
+    &python::DRIVER,
+    &radamec::DRIVER,
+    &tng3::DRIVER,
     &uncjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).

@@ -253,7 +253,10 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Wanda",
             "vrpn_Button_PinchGlove",
             "vrpn_Joystick",
-            "vrpn_ImmersionBox"
+            "vrpn_ImmersionBox",
+            "vrpn_Radamec_SPI",
+            "vrpn_Tng3",
+            "vrpn_Button_Python"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

@@ -1,6 +1,6 @@
 //! The one system call mio does not offer: receiving several datagrams, with their sources,
 //! in one call (`recvmmsg`). The crate's only `unsafe` code outside the programs' signal
-//! handlers lives here.
+//! handlers, the C and Python bindings and the drivers' device ioctls lives here.
 #![allow(unsafe_code)]
 
 use std::io;
