@@ -45,6 +45,8 @@ fn main() -> ExitCode {
         return ExitCode::SUCCESS;
     }
     signals::install();
+    // 255 clients on the UDP path hold three sockets each.
+    vrpn::server::raise_descriptor_limit();
     if let Some(shift) = opts.clock_shift {
         vrpn::time::shift_wall_clock(shift);
         errln!("{PROGRAM}: stamping messages {shift:+} s off this host's clock (-clockshift)");

@@ -324,3 +324,145 @@ fn server_logs_outgoing_from_start_and_incoming_per_client() {
         "the client's ping is in the per-client incoming log"
     );
 }
+
+/// What a control called from inside a pose callback did, for one control.
+struct InCallback {
+    /// Times (µs since the first pose) of the poses delivered, in order.
+    poses: Vec<i64>,
+    /// Dropped-connection events (a reset fires one).
+    drops: u32,
+    /// `elapsed()` after the outside call returned.
+    elapsed: f64,
+}
+
+/// Replays the golden tracker log paused, asks to play the first second from outside, and
+/// calls `control` from inside the 10th pose callback (issue 29, item 1: this panicked and
+/// broke the remote for good). Then plays the rest from outside.
+fn control_in_callback(control: &'static str) -> InCallback {
+    let conn = Connection::replay_file(&fixture("tracker_udp_lob.out.vrpn")).unwrap();
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    let r = conn.replay().unwrap();
+    let first = r.first_time().unwrap();
+    let poses = Rc::new(RefCell::new(Vec::new()));
+    let drops = Rc::new(Cell::new(0u32));
+    let d = drops.clone();
+    conn.on_event(ConnectionEvent::DroppedConnection, move || {
+        d.set(d.get() + 1)
+    });
+    let (p, weak) = (poses.clone(), conn.downgrade());
+    tracker.on_pose(move |pose| {
+        let n = {
+            let mut p = p.borrow_mut();
+            p.push(((pose.time.seconds_since(first)) * 1e6).round() as i64);
+            p.len()
+        };
+        if n != 10 {
+            return;
+        }
+        let conn = weak.upgrade().unwrap();
+        let r = conn.replay().unwrap();
+        // Every query works from a callback too.
+        assert!(!r.eof() && r.elapsed() < 1.0 && r.length_secs() > 3.0);
+        assert!(r.first_time().is_some() && r.last_time().is_some());
+        let _ = (r.file_time(), r.rate());
+        match control {
+            "set_rate" => r.set_rate(f64::INFINITY),
+            "reset" => r.reset(),
+            "play_to_time" => r.play_to_time(2.0),
+            "play_one" => assert!(r.play_one()),
+            "jump_to_time" => assert!(r.jump_to_time(2.0)),
+            "mainloop" => conn.mainloop().unwrap(),
+            other => panic!("{other}"),
+        }
+    });
+    r.set_rate(0.0);
+    r.play_to_time(1.0);
+    let elapsed = r.elapsed();
+    let before_rest = poses.borrow().len();
+    // The remote still works: everything after plays from outside, in order.
+    r.play_to_time(r.length_secs() + 1.0);
+    assert!(r.eof(), "{control}: not at the end");
+    assert!(
+        poses.borrow().len() > before_rest,
+        "{control}: nothing played after"
+    );
+    assert_eq!(tracker.bad_messages(), 0, "{control}");
+    let poses = poses.borrow().clone();
+    InCallback {
+        poses,
+        drops: drops.get(),
+        elapsed,
+    }
+}
+
+#[test]
+fn every_replay_control_is_safe_from_inside_a_callback() {
+    // The reference: the log played in order, in one go, from outside.
+    let all = control_in_callback("mainloop").poses;
+    assert_eq!(all.len(), 410);
+    let up_to = |secs: f64| all.iter().filter(|&&t| t as f64 <= secs * 1e6).count();
+    let sorted = |v: &[i64]| v.windows(2).all(|w| w[0] <= w[1]);
+
+    // A rate change takes effect at once; the paused play-to still ends at 1 s.
+    let r = control_in_callback("set_rate");
+    assert_eq!(r.poses, all, "set_rate");
+    assert!((r.elapsed - 1.0).abs() < 1e-6, "{}", r.elapsed);
+
+    // Reset: back to the start when the callback returns (a dropped-connection event, as in
+    // C++); the rest of the play-to is dropped with the old position, so the outside
+    // play-to then plays the whole log again.
+    let r = control_in_callback("reset");
+    assert_eq!(r.drops, 1);
+    assert_eq!(&r.poses[..10], &all[..10]);
+    assert_eq!(&r.poses[10..], &all[..], "reset");
+
+    // Play-to from the callback replaces the running one: up to 2 s, then the rest.
+    let r = control_in_callback("play_to_time");
+    assert!((r.elapsed - 2.0).abs() < 1e-6, "{}", r.elapsed);
+    assert_eq!(r.poses, all, "play_to_time");
+    assert_eq!(
+        r.poses.iter().filter(|&&t| t as f64 <= 2e6).count(),
+        up_to(2.0)
+    );
+
+    // Play-one replaces the running play-to: exactly one more entry, then nothing until the
+    // outside play-to; no pose is lost or repeated.
+    let r = control_in_callback("play_one");
+    assert!(r.elapsed < 1.0, "{}", r.elapsed);
+    assert_eq!(r.poses, all, "play_one");
+
+    // A jump from the callback: nothing delivered between the 10th pose and 2 s.
+    let r = control_in_callback("jump_to_time");
+    assert!((r.elapsed - 2.0).abs() < 1e-6, "{}", r.elapsed);
+    assert_eq!(&r.poses[..10], &all[..10]);
+    assert!(r.poses[10] as f64 > 2e6, "{:?}", &r.poses[..12]);
+    assert_eq!(r.poses.len(), 10 + (all.len() - up_to(2.0)), "jump_to_time");
+    assert!(sorted(&r.poses));
+}
+
+/// Controls called from a callback that `mainloop()` runs (at a rate, not paused) are just as
+/// safe, and what they play is delivered by that same pass.
+#[test]
+fn a_reset_inside_a_mainloop_callback_replays_from_the_start() {
+    let conn = Connection::replay_file(&fixture("tracker_udp_lob.out.vrpn")).unwrap();
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    conn.replay().unwrap().set_rate(f64::INFINITY);
+    let n = Rc::new(Cell::new(0u32));
+    let (c, weak) = (n.clone(), conn.downgrade());
+    tracker.on_pose(move |_| {
+        c.set(c.get() + 1);
+        if c.get() == 100 {
+            weak.upgrade().unwrap().replay().unwrap().reset();
+        }
+    });
+    let start = Instant::now();
+    while !conn.replay().unwrap().eof() {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "stalled at {}",
+            n.get()
+        );
+        tracker.mainloop().unwrap();
+    }
+    assert_eq!(n.get(), 100 + 410);
+}

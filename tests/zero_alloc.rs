@@ -374,3 +374,73 @@ fn log_replay_does_not_allocate_per_message() {
         n.get() - before
     );
 }
+
+/// A server fanning reports out to many clients on the UDP path: every client's datagrams of
+/// a pass leave in one batched send, and that path allocates nothing either.
+#[test]
+fn udp_fan_out_to_many_clients_does_not_allocate() {
+    const CLIENTS: usize = 16;
+    const STEPS: u64 = 2_000;
+    let server_conn = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+    let port = server_conn.local_port().unwrap();
+    let server = TrackerServer::new("Tracker0", &server_conn, 2).unwrap();
+    let clients: Vec<(TrackerRemote, Rc<Cell<u64>>)> = (0..CLIENTS)
+        .map(|_| {
+            let conn =
+                Connection::client("127.0.0.1", port, false, vrpn::Limits::default()).unwrap();
+            let remote = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+            let poses = counter();
+            let mut hit = bump(&poses);
+            remote.on_pose(move |_| hit());
+            (remote, poses)
+        })
+        .collect();
+    let step = |i: u64| {
+        for sensor in 0..2 {
+            server
+                .report_pose(sensor, TimeVal::now(), [i as f64, 2.0, 3.0], IDENTITY)
+                .unwrap();
+        }
+        server_conn.mainloop().unwrap();
+        for (remote, _) in &clients {
+            remote.mainloop().unwrap();
+        }
+    };
+    let start = Instant::now();
+    let mut i = 0;
+    while clients.iter().any(|(_, p)| p.get() < 200) {
+        assert!(start.elapsed() < Duration::from_secs(20), "warm-up stalled");
+        step(i);
+        i += 1;
+        std::thread::sleep(Duration::from_micros(100));
+    }
+    let before: Vec<u64> = clients.iter().map(|(_, p)| p.get()).collect();
+    let datagrams_before = udp_out_datagrams();
+    let allocs = allocations_in(|| {
+        for k in 0..STEPS {
+            step(i + k);
+        }
+        for _ in 0..200 {
+            server_conn.mainloop().unwrap();
+            for (remote, _) in &clients {
+                remote.mainloop().unwrap();
+            }
+        }
+    });
+    let datagrams_after = udp_out_datagrams();
+    for ((_, p), b) in clients.iter().zip(&before) {
+        let got = p.get() - b;
+        assert!(
+            got >= 2 * STEPS * 99 / 100,
+            "a client got {got} poses over UDP"
+        );
+    }
+    if let (Some(b), Some(a)) = (datagrams_before, datagrams_after) {
+        assert!(
+            a - b >= STEPS * CLIENTS as u64,
+            "only {} UDP datagrams went out",
+            a - b
+        );
+    }
+    assert_eq!(allocs, 0, "allocations fanning out over UDP");
+}

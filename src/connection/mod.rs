@@ -22,6 +22,7 @@ pub use liveness::is_service_sender;
 mod logs;
 pub mod names;
 mod open;
+mod pass;
 mod printer;
 mod replay_control;
 mod service;
@@ -37,11 +38,12 @@ use crate::error::Error;
 use crate::name::DeviceName;
 use crate::net::shell::Shell;
 use crate::net::{PassClock, Reactor};
-use crate::proto::{Delivery, Session};
+use crate::proto::Session;
 use crate::time::{Now, TimeSource, TimeVal};
 use crate::wire;
 use dispatch::{CallbackList, HandlerId, HandlerTable, Message, SenderFilter, SenderId, TypeId};
 
+pub use crate::net::interrupt_pass;
 pub(crate) use liveness::Liveness;
 pub use open::ConnectionOptions;
 pub use printer::{set_print_threshold, set_text_printer, TextPrinter};
@@ -94,6 +96,10 @@ struct Inner {
     /// Someone waits on the reactor's descriptor from outside ([`Connection::fd`]): every
     /// pass sets the reactor's timer for this connection's next deadline.
     watched: Cell<bool>,
+    /// `Limits::max_pass_time`.
+    pass_time: Duration,
+    /// The last pass ended with deliveries left for the next (its time was up).
+    left_over: Cell<bool>,
 }
 
 /// A VRPN connection handle. Clones share the connection.
@@ -146,6 +152,7 @@ fn new_reactor() -> Result<Reactor, Error> {
 
 impl Connection {
     fn from_parts(session: Session, shell: Shell) -> Connection {
+        let pass_time = session.limits().max_pass_time;
         Connection {
             inner: Rc::new(Inner {
                 reactor: shell.reactor().cloned(),
@@ -164,6 +171,8 @@ impl Connection {
                 liveness_started: Cell::new(false),
                 printed: RefCell::new(Vec::new()),
                 watched: Cell::new(false),
+                pass_time,
+                left_over: Cell::new(false),
             }),
         }
     }
@@ -583,143 +592,6 @@ impl Connection {
         self.inner.any_deferred.set(false);
     }
 
-    // -------------------------------------------------------------- the loop
-
-    /// Does all pending work without blocking: accepts and (re)connects peers, reads and
-    /// dispatches every message that arrived, runs the remotes' liveness pings, and writes
-    /// queued output. Reads the clock once.
-    ///
-    /// One call serves every device on this connection (remotes sharing a connection need
-    /// only one of them called). Called from inside a callback it returns at once (the outer
-    /// call does the work).
-    pub fn mainloop(&self) -> Result<(), Error> {
-        if self.inner.depth.get() > 0 {
-            return Ok(());
-        }
-        if let Some(r) = &self.inner.reactor {
-            r.poll_now().map_err(|e| Error::io("polling sockets", e))?;
-        }
-        let clock = &self.inner.clock;
-        let outer = clock.begin();
-        {
-            let mut core = self.inner.core.borrow_mut();
-            let Core { session, shell } = &mut *core;
-            shell.service(clock, session);
-            if shell.deadline_passed(session.poll_timeout(), clock) {
-                session.handle_timeout(clock.now());
-            }
-            if session.has_io() {
-                shell.carry_out(clock, session);
-            }
-            session.begin_pass(clock);
-        }
-        self.pump(clock);
-        self.run_liveness(clock);
-        {
-            let mut core = self.inner.core.borrow_mut();
-            let Core { session, shell } = &mut *core;
-            shell.flush(clock, session);
-            session.flush_logs_some(LOG_FLUSH_PER_PASS);
-        }
-        // Deliveries queued by the flush (a peer that failed on write).
-        if self.inner.core.borrow().session.has_deliveries() {
-            self.pump(clock);
-        }
-        if outer {
-            clock.end();
-        }
-        if self.inner.watched.get() {
-            self.arm_wakeup();
-        }
-        Ok(())
-    }
-
-    /// Takes deliveries from the session and hands them to handlers, reading more from the
-    /// sockets whenever the session runs dry, until nothing more arrives.
-    fn pump(&self, clock: &dyn TimeSource) {
-        loop {
-            // One borrow of the core per delivery: poll, carry out I/O requests, read more.
-            let (d, scratch) = {
-                let mut core = self.inner.core.borrow_mut();
-                let Core { session, shell } = &mut *core;
-                let d = loop {
-                    if let Some(d) = session.poll_delivery(clock) {
-                        break Some(d);
-                    }
-                    if session.has_io() {
-                        shell.carry_out(clock, session);
-                    }
-                    if shell.read(clock, session) || session.has_deliveries() {
-                        continue;
-                    }
-                    break None;
-                };
-                let scratch = match d {
-                    Some(Delivery::Message { .. }) => Some(session.take_scratch()),
-                    _ => None,
-                };
-                (d, scratch)
-            };
-            match (d, scratch) {
-                (None, _) => break,
-                (
-                    Some(Delivery::Message {
-                        time,
-                        sender_time,
-                        sender,
-                        type_id,
-                        len,
-                    }),
-                    Some(scratch),
-                ) => {
-                    self.deliver(&Message {
-                        time,
-                        sender_time,
-                        sender: SenderId(sender),
-                        type_id: TypeId(type_id),
-                        payload: &scratch[..len],
-                        conn: self,
-                        from_peer: true,
-                    });
-                    self.inner
-                        .core
-                        .borrow_mut()
-                        .session
-                        .restore_scratch(scratch);
-                }
-                (Some(d), _) => self.dispatch_delivery(clock, d),
-            }
-        }
-    }
-
-    fn dispatch_delivery(&self, clock: &dyn TimeSource, d: Delivery) {
-        match d {
-            // Messages are delivered by `pump`, which lends the payload buffer.
-            Delivery::Message { .. } => {}
-            Delivery::Event(ev) => {
-                let now = clock.now();
-                self.liveness_event(now, ev);
-                self.deliver(&Message {
-                    time: now.wall,
-                    sender_time: now.wall,
-                    sender: SenderId(0),
-                    type_id: TypeId(ev.type_id()),
-                    payload: &[],
-                    conn: self,
-                    from_peer: false,
-                });
-            }
-            Delivery::Notice(n) => self.dispatch_notice(n),
-            Delivery::PeerSender(local) => {
-                if let Some(name) = self.sender_name(SenderId(local)) {
-                    self.inner.peer_senders.call(name.as_str());
-                }
-            }
-            Delivery::State(s) => self.inner.states.call(&s),
-            Delivery::PeerSendersComplete => self.check_wanted_devices(),
-        }
-    }
-
     /// Hands a notice to the notice callbacks, or to the default printer when there are none.
     pub(crate) fn dispatch_notice(&self, n: crate::proto::Notice) {
         if self.inner.notices.is_empty() {
@@ -772,6 +644,10 @@ impl Connection {
     /// time-out, a liveness ping), if ever. A loop that waits on several connections sleeps
     /// until the earliest of theirs.
     pub fn poll_timeout(&self) -> Option<Instant> {
+        if self.inner.left_over.get() || self.inner.core.borrow().session.input_left_over() {
+            // The last pass left messages buffered: the next is due now.
+            return Some(Instant::now());
+        }
         let session = self.inner.core.borrow().session.poll_timeout();
         let pings = self.liveness_deadline();
         match (session, pings) {

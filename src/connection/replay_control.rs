@@ -1,8 +1,11 @@
 //! Controls of a log replay (C++ `vrpn_File_Connection`): rate, reset, play-to, jump-to.
+//!
+//! Every control may be called from inside a callback, including one the replay itself is
+//! running: the control changes the replay's position at once, and what it plays is
+//! delivered when the callback returns, by the delivery loop that ran the callback.
 
 use super::{Connection, Core};
 use crate::log::replay::Replay;
-use crate::proto::Delivery;
 use crate::time::TimeVal;
 
 /// Controls of a log replay, borrowed from its connection.
@@ -27,29 +30,34 @@ impl Connection {
         f(session.replay_mut().expect("a replay connection"))
     }
 
-    /// Delivers what the replay has due now (controls called from anywhere, handlers
-    /// included: nesting is counted, so a control inside a handler is safe).
+    /// Delivers what the replay has due now. Called from inside a callback (the payload
+    /// buffer is then on loan to the running delivery), it delivers nothing itself: the
+    /// control has changed the replay's position, and the delivery loop that runs the
+    /// callback plays what became due as soon as the callback returns (the next
+    /// `mainloop()` when no delivery loop runs it).
     fn play_due(&self) {
+        if self.inner.depth.get() > 0 {
+            return;
+        }
         let clock = &self.inner.clock;
         let outer = clock.begin();
-        self.pump(clock);
+        // Everything due, however long it takes: the control promises it (an interruption
+        // asked for by a callback still ends it early).
+        crate::net::clear_interrupt();
+        self.pump(clock, &mut crate::net::PassBudget::new(None));
         if outer {
             clock.end();
         }
     }
 
-    /// Consumes due replay entries without delivering user messages (jump).
-    fn skip_due(&self) {
-        let now = self.now();
-        loop {
-            let d = self.inner.core.borrow_mut().session.poll_delivery(&now);
-            match d {
-                None => break,
-                Some(Delivery::Message { .. }) => {}
-                Some(Delivery::Notice(n)) => self.dispatch_notice(n),
-                Some(_) => {}
-            }
-        }
+    /// Starts or ends skipping: user messages due meanwhile are consumed without being
+    /// delivered (descriptions on the way are still learned).
+    fn skip_user_messages(&self, skip: bool) {
+        self.inner
+            .core
+            .borrow_mut()
+            .session
+            .set_replay_skipping(skip);
     }
 }
 
@@ -68,23 +76,27 @@ impl ReplayControl<'_> {
 
     /// Back to the start (handlers see a dropped-connection event, as in C++).
     pub fn reset(&self) {
+        self.conn.skip_user_messages(false);
         self.conn.with_replay(|r| r.reset());
         self.conn.play_due();
     }
 
     /// Plays, now, every message up to `secs` after the first one (rewinding first when that
     /// is behind the current position). Saturates: `f64::INFINITY` plays to the end; NaN does
-    /// nothing.
+    /// nothing. From inside a callback: when the callback returns.
     pub fn play_to_time(&self, secs: f64) {
+        self.conn.skip_user_messages(false);
         self.conn.with_replay(|r| r.play_to_time(secs));
         self.conn.play_due();
     }
 
-    /// Plays the next message now, whatever its time. Returns false at the end of the file.
+    /// Plays the next message now, whatever its time (from inside a callback: when the
+    /// callback returns). Returns false at the end of the file.
     pub fn play_one(&self) -> bool {
         if self.eof() {
             return false;
         }
+        self.conn.skip_user_messages(false);
         self.conn.with_replay(|r| r.play_one());
         self.conn.play_due();
         true
@@ -96,7 +108,8 @@ impl ReplayControl<'_> {
     /// returns false and moves nothing.
     pub fn jump_to_time(&self, secs: f64) -> bool {
         let inside = self.conn.with_replay(|r| r.jump_to_time(secs));
-        self.conn.skip_due();
+        self.conn.skip_user_messages(true);
+        self.conn.play_due();
         inside
     }
 

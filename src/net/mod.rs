@@ -119,3 +119,135 @@ impl TimeSource for PassClock {
         }
     }
 }
+
+thread_local! {
+    /// Set by [`interrupt_pass`]: the delivery loop running on this thread stops after the
+    /// callback that is running.
+    static INTERRUPT: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Asks the `mainloop()` pass (or replay control) running on this thread to return after the
+/// callback that is running now; what remains is delivered by the next call. For a runtime
+/// that must act between callbacks: the Python module calls it when a callback was
+/// interrupted by a signal (Ctrl-C), so that `KeyboardInterrupt` surfaces at once.
+pub fn interrupt_pass() {
+    INTERRUPT.with(|i| i.set(true));
+}
+
+/// Forgets an interruption asked for outside any pass.
+pub(crate) fn clear_interrupt() {
+    INTERRUPT.with(|i| i.set(false));
+}
+
+/// Bounds one delivery loop: it stops once it has delivered for `limit` (when there is one),
+/// or when [`interrupt_pass`] asks (looked for with the clock, or after every delivery when
+/// there is no limit). The clock is read only from the second delivery of a loop on (a pass that delivers one message reads none), then at intervals that double
+/// while little of the budget is spent and shrink to every delivery once an eighth of it is,
+/// so the loop overshoots its limit by at most a sixteenth of it plus one callback, whether
+/// callbacks take nanoseconds or seconds.
+#[derive(Debug)]
+pub(crate) struct PassBudget {
+    limit: Option<std::time::Duration>,
+    delivered: u32,
+    next_check: u32,
+    interval: u32,
+    start: Option<std::time::Instant>,
+}
+
+impl PassBudget {
+    /// Most deliveries between two checks (of the clock and of an interruption).
+    const MAX_INTERVAL: u32 = 64;
+
+    /// A budget of `limit` (`None`: only an interruption stops the loop).
+    pub(crate) fn new(limit: Option<std::time::Duration>) -> PassBudget {
+        PassBudget {
+            limit,
+            delivered: 0,
+            next_check: 1,
+            interval: 1,
+            start: None,
+        }
+    }
+
+    /// One delivery is done: false when the loop must stop now.
+    #[inline]
+    pub(crate) fn spend(&mut self) -> bool {
+        self.delivered += 1;
+        self.delivered < self.next_check || self.check()
+    }
+
+    #[inline(never)]
+    fn check(&mut self) -> bool {
+        if INTERRUPT.with(|i| i.replace(false)) {
+            return false;
+        }
+        let Some(limit) = self.limit else {
+            // No clock to read: look for an interruption after every delivery.
+            self.next_check = self.delivered + 1;
+            return true;
+        };
+        if self.delivered < 2 {
+            // A single delivery costs no clock reading.
+            self.next_check = 2;
+            return true;
+        }
+        let now = std::time::Instant::now();
+        let Some(start) = self.start else {
+            self.start = Some(now);
+            self.next_check = self.delivered + 1;
+            return true;
+        };
+        let spent = now.saturating_duration_since(start);
+        if spent >= limit {
+            return false;
+        }
+        self.interval = if spent < limit / 8 {
+            (self.interval * 2).min(Self::MAX_INTERVAL)
+        } else {
+            1
+        };
+        self.next_check = self.delivered + self.interval;
+        true
+    }
+}
+
+#[cfg(test)]
+mod budget_tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn slow_deliveries_stop_near_the_limit() {
+        let mut b = PassBudget::new(Some(Duration::from_millis(20)));
+        let start = std::time::Instant::now();
+        let mut n = 0;
+        while b.spend() {
+            n += 1;
+            std::thread::sleep(Duration::from_millis(4));
+            assert!(n < 100, "never stopped");
+        }
+        // Two unmeasured deliveries, then about 20 ms of 4 ms ones.
+        assert!((5..=10).contains(&n), "{n} deliveries");
+        assert!(start.elapsed() >= Duration::from_millis(20));
+    }
+
+    #[test]
+    fn fast_deliveries_check_the_clock_rarely_and_interruptions_stop_them() {
+        let mut b = PassBudget::new(Some(Duration::from_secs(3600)));
+        for _ in 0..10_000 {
+            assert!(b.spend());
+        }
+        assert_eq!(b.interval, PassBudget::MAX_INTERVAL);
+        interrupt_pass();
+        let mut more = 0;
+        while b.spend() {
+            more += 1;
+        }
+        assert!(
+            more < PassBudget::MAX_INTERVAL,
+            "{more} deliveries after the interruption"
+        );
+        // Taken by that loop: the next one runs.
+        assert!(PassBudget::new(None).spend());
+    }
+}

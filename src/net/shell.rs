@@ -10,9 +10,9 @@ use mio::net::{TcpListener, TcpStream, UdpSocket};
 use mio::{Interest, Token};
 
 use super::reactor::{DeadlineTimer, Reactor, ReadyBits};
-use super::sys::recv_datagrams;
+use super::sys::{recv_datagrams, SendBatch, SEND_BATCH};
 use crate::error::Error;
-use crate::proto::buffers::{DatagramQueue, INBOX_SLOTS};
+use crate::proto::buffers::INBOX_SLOTS;
 use crate::proto::{IoRequest, PeerId, Session};
 use crate::time::TimeSource;
 
@@ -74,7 +74,8 @@ struct PeerIo {
     /// The address `udp_in` is connected to (`IoRequest::PinUdpSource`): every datagram comes
     /// from there, and receiving need not ask the kernel for sources.
     udp_source: Option<SocketAddrV4>,
-    udp_out: Option<UdpSocket>,
+    /// Where this peer's datagrams go (through the shell's one outbound socket).
+    udp_dest: Option<SocketAddrV4>,
 }
 
 enum Listeners {
@@ -103,6 +104,9 @@ pub(crate) struct Shell {
     listeners: Listeners,
     peers: Vec<Option<PeerIo>>,
     request_buf: [u8; 256],
+    /// The one outbound UDP socket of every peer (unconnected, made with the first peer's
+    /// channel): every peer's datagrams of a pass go out in one `sendmmsg`.
+    udp_out: Option<UdpSocket>,
 }
 
 fn v4(a: SocketAddr) -> SocketAddrV4 {
@@ -153,7 +157,7 @@ fn put_peer(
         connecting,
         udp_in: None,
         udp_source: None,
-        udp_out: None,
+        udp_dest: None,
     });
 }
 
@@ -167,6 +171,7 @@ impl Shell {
             listeners: Listeners::None,
             peers: Vec::new(),
             request_buf: [0; 256],
+            udp_out: None,
         }
     }
 
@@ -202,6 +207,7 @@ impl Shell {
             },
             peers: Vec::new(),
             request_buf: [0; 256],
+            udp_out: None,
         })
     }
 
@@ -243,6 +249,7 @@ impl Shell {
             },
             peers: Vec::new(),
             request_buf: [0; 256],
+            udp_out: None,
         };
         Ok((shell, announced))
     }
@@ -509,14 +516,13 @@ impl Shell {
                     }
                 }
                 IoRequest::OpenUdpOut { peer, addr } => {
-                    let sock = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(
-                        Ipv4Addr::UNSPECIFIED,
-                        0,
-                    )))
-                    .and_then(|s| s.connect(SocketAddr::V4(addr)).map(|_| s));
-                    let ok = match (sock, self.peer_io(peer)) {
-                        (Ok(s), Some(p)) => {
-                            p.udp_out = Some(s);
+                    if self.udp_out.is_none() {
+                        self.udp_out = open_udp_out().ok();
+                    }
+                    let have_socket = self.udp_out.is_some();
+                    let ok = match self.peer_io(peer) {
+                        Some(p) if have_socket => {
+                            p.udp_dest = Some(addr);
                             true
                         }
                         _ => false,
@@ -604,8 +610,11 @@ impl Shell {
         got
     }
 
-    /// Writes what the session queued, as far as the sockets take it.
+    /// Writes what the session queued, as far as the sockets take it: one write per peer with
+    /// reliable bytes waiting, and every peer's datagrams in one `sendmmsg` (a batch of
+    /// [`SEND_BATCH`]; more go in further calls).
     pub(crate) fn flush(&mut self, clock: &dyn TimeSource, session: &mut Session) {
+        let mut datagrams = false;
         for p in self.peers.iter_mut().flatten() {
             if p.connecting {
                 continue;
@@ -619,15 +628,70 @@ impl Shell {
             {
                 continue;
             }
-            match session.udp_outbox(id) {
-                Some(queue) if !queue.is_empty() => send_udp(p.udp_out.as_ref(), queue),
-                _ => {}
-            }
+            datagrams |= p.udp_dest.is_some() && session.udp_queue(id).is_some();
+        }
+        if datagrams {
+            self.send_datagrams(session);
         }
         if session.has_io() {
             self.carry_out(clock, session);
         }
     }
+
+    /// Sends the datagrams waiting for every peer, peer after peer, in as few `sendmmsg`
+    /// calls as the batch size allows. What the socket does not take now stays queued (the
+    /// peer's ring drops its oldest datagrams if that goes on).
+    #[inline(never)]
+    fn send_datagrams(&mut self, session: &mut Session) {
+        let Some(out) = &self.udp_out else {
+            return;
+        };
+        loop {
+            let mut batch = SendBatch::new();
+            'fill: for p in self.peers.iter().flatten() {
+                let (Some(dest), Some(queue)) = (p.udp_dest, session.udp_queue(p.id)) else {
+                    continue;
+                };
+                for datagram in queue.iter() {
+                    if !batch.push(dest, datagram) {
+                        break 'fill;
+                    }
+                }
+            }
+            let total = batch.len();
+            if total == 0 {
+                return;
+            }
+            let sent = batch.send(out);
+            // Take out what went, walking the peers in the same order as the batch was filled.
+            let mut left = sent;
+            for p in self.peers.iter().flatten() {
+                if left == 0 {
+                    break;
+                }
+                if p.udp_dest.is_some() {
+                    left -= session.udp_consume(p.id, left);
+                }
+            }
+            if sent < total || total < SEND_BATCH {
+                return;
+            }
+        }
+    }
+}
+
+/// The shell's outbound UDP socket: unbound to any peer, on any interface (the kernel picks
+/// the source address by route, as it did for one connected socket per peer), with room for a
+/// pass's datagrams to every peer.
+fn open_udp_out() -> io::Result<UdpSocket> {
+    let s = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(Ipv4Addr::UNSPECIFIED, 0)))?;
+    // Best effort: the kernel caps it at net.core.wmem_max.
+    let _ = nix::sys::socket::setsockopt(
+        std::os::fd::AsRawFd::as_raw_fd(&s),
+        nix::sys::socket::sockopt::SndBuf,
+        &(1usize << 20),
+    );
+    Ok(s)
 }
 
 /// One read from a peer's TCP socket into the session. `Some(true)` when bytes came, `None`
@@ -724,22 +788,6 @@ fn write_tcp(
         }
     }
     true
-}
-
-/// Sends a peer's queued datagrams; without an outbound socket they are discarded
-/// (unreliable, as a refused or failed datagram is).
-#[inline(never)]
-fn send_udp(out: Option<&UdpSocket>, queue: &mut DatagramQueue) {
-    let Some(sock) = out else {
-        queue.clear();
-        return;
-    };
-    while let Some(dg) = queue.front() {
-        match sock.send(dg) {
-            Err(e) if would_block(&e) => break,
-            _ => queue.pop_front(),
-        }
-    }
 }
 
 impl Drop for Shell {

@@ -1,10 +1,16 @@
-//! The one system call mio does not offer: receiving several datagrams, with their sources,
-//! in one call (`recvmmsg`). The crate's only `unsafe` code outside the programs' signal
-//! handlers, the C and Python bindings and the drivers' device ioctls lives here.
+//! The two system calls mio does not offer: receiving several datagrams, with their sources,
+//! in one call (`recvmmsg`), and sending datagrams to many destinations in one call
+//! (`sendmmsg`). The crate's only `unsafe` code outside the programs' signal handlers, the C and
+//! Python bindings and the drivers' device ioctls lives here.
 #![allow(unsafe_code)]
 
 use std::io;
 use std::net::{Ipv4Addr, SocketAddrV4};
+#[cfg(any(target_os = "linux", target_os = "android"))]
+use std::{marker::PhantomData, mem::MaybeUninit};
+
+#[cfg(any(target_os = "linux", target_os = "android"))]
+use nix::libc;
 
 use mio::net::UdpSocket;
 
@@ -89,4 +95,144 @@ pub(crate) fn recv_datagrams(
     inbox.lens[0] = n;
     inbox.from[0] = from;
     Ok(1)
+}
+
+/// Datagrams one [`send_datagrams`] call hands the kernel at most.
+pub(crate) const SEND_BATCH: usize = 256;
+
+/// Datagrams to send with one system call: each one's destination and bytes, borrowed until
+/// [`send`](SendBatch::send). Built on the stack and filled only as far as used, so a pass
+/// that sends one datagram pays for one.
+#[cfg(any(target_os = "linux", target_os = "android"))]
+pub(crate) struct SendBatch<'a> {
+    iov: [MaybeUninit<libc::iovec>; SEND_BATCH],
+    names: [MaybeUninit<libc::sockaddr_in>; SEND_BATCH],
+    len: usize,
+    _bytes: PhantomData<&'a [u8]>,
+}
+
+#[cfg(any(target_os = "linux", target_os = "android"))]
+impl<'a> SendBatch<'a> {
+    pub(crate) fn new() -> SendBatch<'a> {
+        SendBatch {
+            // SAFETY: an array of `MaybeUninit` needs no initialisation.
+            iov: unsafe { MaybeUninit::uninit().assume_init() },
+            names: unsafe { MaybeUninit::uninit().assume_init() },
+            len: 0,
+            _bytes: PhantomData,
+        }
+    }
+
+    /// Adds a datagram; false (and nothing added) when the batch is full.
+    #[inline]
+    pub(crate) fn push(&mut self, to: SocketAddrV4, bytes: &'a [u8]) -> bool {
+        if self.len == SEND_BATCH {
+            return false;
+        }
+        self.iov[self.len].write(libc::iovec {
+            iov_base: bytes.as_ptr() as *mut libc::c_void,
+            iov_len: bytes.len(),
+        });
+        // SAFETY: sockaddr_in is plain data; all-zero is a valid value (and zero padding
+        // is what the kernel expects in sin_zero).
+        let mut a: libc::sockaddr_in = unsafe { std::mem::zeroed() };
+        a.sin_family = libc::AF_INET as libc::sa_family_t;
+        a.sin_port = to.port().to_be();
+        a.sin_addr.s_addr = u32::from(*to.ip()).to_be();
+        self.names[self.len].write(a);
+        self.len += 1;
+        true
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Sends the batch in order with `sendmmsg`; returns how many datagrams the kernel took
+    /// (fewer than all when the socket's buffer filled: the rest may be sent later). A
+    /// datagram the kernel refused for another reason counts as taken (lost, as unreliable
+    /// traffic may be), so one bad destination cannot stall the others.
+    pub(crate) fn send(&mut self, sock: &UdpSocket) -> usize {
+        use std::os::fd::AsRawFd;
+        let mut msgs: [MaybeUninit<libc::mmsghdr>; SEND_BATCH] =
+            // SAFETY: an array of `MaybeUninit` needs no initialisation.
+            unsafe { MaybeUninit::uninit().assume_init() };
+        let mut sent = 0;
+        while sent < self.len {
+            let n = self.len - sent;
+            for (k, slot) in msgs.iter_mut().enumerate().take(n) {
+                // SAFETY: msghdr is plain data (all-zero is valid: no name, no control);
+                // the pointers set point into `self.iov` / `self.names`, initialised up to
+                // `self.len`, which outlive the call; the bytes they point at are borrowed
+                // for 'a, which outlives `self`.
+                let mut h: libc::mmsghdr = unsafe { std::mem::zeroed() };
+                h.msg_hdr.msg_name = self.names[sent + k].as_mut_ptr().cast();
+                h.msg_hdr.msg_namelen = std::mem::size_of::<libc::sockaddr_in>() as _;
+                h.msg_hdr.msg_iov = self.iov[sent + k].as_mut_ptr();
+                h.msg_hdr.msg_iovlen = 1;
+                slot.write(h);
+            }
+            // SAFETY: the first `n` headers are initialised (above) and valid for the call.
+            let r = unsafe {
+                libc::sendmmsg(
+                    sock.as_raw_fd(),
+                    msgs.as_mut_ptr().cast(),
+                    n as _,
+                    libc::MSG_DONTWAIT as _,
+                )
+            };
+            if r < 0 {
+                let e = io::Error::last_os_error();
+                match e.kind() {
+                    io::ErrorKind::WouldBlock => break,
+                    io::ErrorKind::Interrupted => continue,
+                    // The first datagram failed (e.g. no route): it is lost, go on.
+                    _ => sent += 1,
+                }
+            } else {
+                // Stopped short: the next call reports why (would block: stop; another
+                // error: that datagram is skipped).
+                sent += r as usize;
+            }
+        }
+        sent
+    }
+}
+
+/// Portable fallback: one `send_to` per datagram.
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+pub(crate) struct SendBatch<'a> {
+    datagrams: Vec<(SocketAddrV4, &'a [u8])>,
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+impl<'a> SendBatch<'a> {
+    pub(crate) fn new() -> SendBatch<'a> {
+        SendBatch {
+            datagrams: Vec::new(),
+        }
+    }
+
+    pub(crate) fn push(&mut self, to: SocketAddrV4, bytes: &'a [u8]) -> bool {
+        if self.datagrams.len() == SEND_BATCH {
+            return false;
+        }
+        self.datagrams.push((to, bytes));
+        true
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.datagrams.len()
+    }
+
+    pub(crate) fn send(&mut self, sock: &UdpSocket) -> usize {
+        let mut sent = 0;
+        for (to, bytes) in &self.datagrams {
+            match sock.send_to(bytes, std::net::SocketAddr::V4(*to)) {
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                _ => sent += 1,
+            }
+        }
+        sent
+    }
 }

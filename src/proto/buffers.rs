@@ -145,6 +145,27 @@ impl DatagramQueue {
         })
     }
 
+    /// The datagrams waiting, oldest first.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &[u8]> + '_ {
+        (0..self.count).map(move |k| {
+            let slot = (self.head + k) % DATAGRAM_SLOTS;
+            let s = slot * MAX_UDP_DATAGRAM;
+            &self.slots[s..s + self.lens[slot]]
+        })
+    }
+
+    /// Number of datagrams waiting.
+    pub(crate) fn len(&self) -> usize {
+        self.count
+    }
+
+    /// Takes out the `n` oldest datagrams (sent or lost).
+    pub(crate) fn pop_many(&mut self, n: usize) {
+        let n = n.min(self.count);
+        self.head = (self.head + n) % DATAGRAM_SLOTS;
+        self.count -= n;
+    }
+
     pub(crate) fn pop_front(&mut self) {
         if self.count > 0 {
             self.head = (self.head + 1) % DATAGRAM_SLOTS;
@@ -155,11 +176,6 @@ impl DatagramQueue {
     pub(crate) fn clear(&mut self) {
         self.count = 0;
         self.head = 0;
-    }
-
-    #[cfg(test)]
-    pub(crate) fn len(&self) -> usize {
-        self.count
     }
 }
 

@@ -86,8 +86,14 @@ pub struct Limits {
     pub no_answer_warning: Duration,
     /// Time allowed for a TCP connect (server call-back or TCP-only client).
     pub connect_timeout: Duration,
-    /// Messages taken from one peer before others get their turn in a mainloop pass.
+    /// Messages taken from one peer in one `mainloop()` pass: every message counts (device
+    /// reports, descriptions, clock queries, messages nobody handles), and the rest waits for
+    /// the next pass, so no peer can keep a pass (and a server's devices) waiting.
     pub max_messages_per_peer_per_loop: usize,
+    /// Time one `mainloop()` pass may spend delivering messages to callbacks before it
+    /// returns; what remains is delivered by the next call. Callbacks slower than the data
+    /// arrives thus still let `mainloop()` return (after about this time plus two callbacks).
+    pub max_pass_time: Duration,
     /// Largest message payload accepted from a peer; a peer that sends a larger one is dropped
     /// with a notice. Default: the C++ receive limit (64008 padded bytes).
     pub max_message_payload: usize,
@@ -103,8 +109,11 @@ pub struct Limits {
     /// Server: connection requests (UDP) accepted per second, over all sources; the rest are
     /// ignored and counted in a notice at most every few seconds.
     pub max_requests_per_second: u32,
-    /// Server: call-back connects in progress at once. When a new request finds them all
-    /// still connecting, the oldest is given up (its host may be dropping SYNs).
+    /// Server: call-back connects in progress at once (default: as many as clients, so that
+    /// every client of a burst is called back at once). When a new request finds them all
+    /// still connecting, the oldest is given up if it has been connecting for longer than
+    /// [`server::CALLBACK_PATIENCE`] (its host may be dropping SYNs); otherwise the request is
+    /// ignored and its client asks again.
     pub max_pending_callbacks: usize,
     /// Server: call back the address a connection request names instead of the address it
     /// came from. C++ does this; it lets anyone aim the server's connects at a third host, so
@@ -126,12 +135,13 @@ impl Default for Limits {
             retry_interval: Duration::from_secs(1),
             no_answer_warning: Duration::from_secs(3),
             connect_timeout: Duration::from_secs(5),
-            max_messages_per_peer_per_loop: 100_000,
+            max_messages_per_peer_per_loop: 1024,
+            max_pass_time: Duration::from_millis(5),
             max_message_payload: wire::MAX_TCP_PADDED_PAYLOAD,
             max_names_per_peer: wire::MAX_IDS,
             handshake_timeout: Duration::from_secs(5),
             max_requests_per_second: 100,
-            max_pending_callbacks: 16,
+            max_pending_callbacks: 255,
             callback_to_named_address: false,
             clock_sync: Some(clock::ClockSyncConfig::default()),
         }

@@ -9,10 +9,14 @@
 //! - is coalesced: while a call-back to that address is in progress, or a peer at that address
 //!   is still greeting, further requests for it are ignored (a waiting client re-sends every
 //!   second);
-//! - is rate-limited ([`Limits::max_requests_per_second`], a token bucket) and bounded in
-//!   flight ([`Limits::max_pending_callbacks`]); when that many call-backs are still connecting
-//!   (a host that drops SYNs makes them hang), the oldest is given up for the new one, so
-//!   hanging call-backs cannot shut out a client whose call-back completes in a round trip;
+//! - is rate-limited ([`Limits::max_requests_per_second`], a token bucket that holds a whole
+//!   server's worth of requests, [`Limits::max_connections`], so that a room of clients
+//!   started together is called back at once) and bounded in flight
+//!   ([`Limits::max_pending_callbacks`]); when that many call-backs are still connecting, one
+//!   that has been connecting for longer than [`CALLBACK_PATIENCE`] (a host that drops SYNs
+//!   makes it hang) is given up for the new one, so hanging call-backs cannot shut out a client
+//!   whose call-back completes in a round trip, while call-backs that are about to complete are
+//!   never given up;
 //! - is never resolved: a named host that is not a dotted quad is not looked up in the loop.
 //!
 //! Ignored requests are counted and reported in one notice at most every
@@ -26,6 +30,11 @@ use crate::wire::lob::Request;
 
 /// Shortest time between two notices about ignored requests.
 pub const NOTICE_INTERVAL: Duration = Duration::from_secs(5);
+
+/// A call-back still connecting after this long may be given up to make room for a new
+/// request: a connect completes in a round trip (well under this even between continents),
+/// so one that has not is likely aimed at a host that drops SYNs.
+pub const CALLBACK_PATIENCE: Duration = Duration::from_millis(500);
 
 /// Why a request was not called back.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -94,14 +103,18 @@ impl RequestPolicy {
         }
     }
 
+    /// Takes one request's token. The bucket refills at the rate and holds the larger of one
+    /// second's worth and a full server's worth of requests: a burst of every client the
+    /// server can take is called back at once, a flood gets that once and then the rate.
     fn take_token(&mut self, now: Instant, limits: &Limits) -> bool {
         let rate = f64::from(limits.max_requests_per_second.max(1));
+        let burst = rate.max(limits.max_connections as f64);
         let elapsed = match self.refilled {
             Some(t) => now.saturating_duration_since(t).as_secs_f64(),
-            None => 1.0,
+            None => f64::INFINITY,
         };
         self.refilled = Some(now);
-        self.tokens = (self.tokens + elapsed * rate).min(rate);
+        self.tokens = (self.tokens + elapsed * rate).min(burst);
         if self.tokens >= 1.0 {
             self.tokens -= 1.0;
             true
@@ -206,8 +219,8 @@ impl RequestPolicy {
             (c.duplicate, "for a call-back already in progress"),
             (
                 c.abandoned,
-                "whose call-backs were still connecting when newer ones needed room \
-                 (Limits::max_pending_callbacks)",
+                "whose call-backs were still connecting after 500 ms when newer ones needed \
+                 room (Limits::max_pending_callbacks)",
             ),
             (c.malformed, "that were not connection requests"),
         ] {
@@ -241,6 +254,7 @@ mod tests {
     fn requests_are_rate_limited_and_summarised() {
         let limits = Limits {
             max_requests_per_second: 10,
+            max_connections: 10,
             ..Limits::default()
         };
         let mut p = RequestPolicy::new();
@@ -264,6 +278,30 @@ mod tests {
             p.decide(later, addr(1), false, 0, 0, &limits),
             Decision::CallBack(_)
         ));
+    }
+
+    #[test]
+    fn a_burst_of_a_full_server_is_called_back_at_once_then_the_rate_holds() {
+        let limits = Limits {
+            max_requests_per_second: 100,
+            ..Limits::default()
+        };
+        let mut p = RequestPolicy::new();
+        let t0 = Instant::now();
+        let called = |p: &mut RequestPolicy, at: Instant, n: u16| {
+            (0..n)
+                .filter(|&i| {
+                    matches!(
+                        p.decide(at, addr(2000 + i), false, 0, 0, &limits),
+                        Decision::CallBack(_)
+                    )
+                })
+                .count()
+        };
+        assert_eq!(called(&mut p, t0, 300), limits.max_connections);
+        assert!(p.summary(t0).unwrap().contains("45 over the rate limit"));
+        // Afterwards a flood gets the rate, not another burst.
+        assert_eq!(called(&mut p, t0 + Duration::from_millis(500), 300), 50);
     }
 
     #[test]

@@ -24,7 +24,14 @@ thread_local! {
 
 /// Keeps `e` to be raised by the running `mainloop()`; when one is already waiting, `e` goes
 /// to `sys.unraisablehook` (printed by default) so that it is not lost silently.
+///
+/// An exception that is not an `Exception` (`KeyboardInterrupt` from Ctrl-C, `SystemExit`)
+/// also ends the running pass after this callback, so that it reaches the program at once
+/// rather than after the pass.
 pub(crate) fn stash(py: Python<'_>, e: PyErr, callable: &Bound<'_, PyAny>) {
+    if !e.is_instance_of::<pyo3::exceptions::PyException>(py) {
+        crate::connection::interrupt_pass();
+    }
     let spare = PENDING.with(|p| {
         let mut p = p.borrow_mut();
         if p.is_none() {
@@ -36,6 +43,15 @@ pub(crate) fn stash(py: Python<'_>, e: PyErr, callable: &Bound<'_, PyAny>) {
     });
     if let Some(e) = spare {
         e.write_unraisable(py, Some(callable));
+    }
+}
+
+/// After a callback: keeps its exception, or, when it returned, lets Python's signal handlers
+/// run (a Ctrl-C that came while Rust code ran between callbacks raises here), so that a
+/// signal ends the pass after the callback that saw it.
+fn after_call(py: Python<'_>, r: PyResult<()>, callable: &Bound<'_, PyAny>) {
+    if let Err(e) = r.and_then(|()| py.check_signals()) {
+        stash(py, e, callable);
     }
 }
 
@@ -76,9 +92,8 @@ impl Slot {
         Python::attach(|py| {
             let Some(f) = self.get(py) else { return };
             let f = f.bind(py);
-            if let Err(e) = Bound::new(py, make()).and_then(|v| f.call1((v,))) {
-                stash(py, e, f);
-            }
+            let r = Bound::new(py, make()).and_then(|v| f.call1((v,)));
+            after_call(py, r.map(drop), f);
         });
     }
 
@@ -87,9 +102,8 @@ impl Slot {
         Python::attach(|py| {
             let Some(f) = self.get(py) else { return };
             let f = f.bind(py);
-            if let Err(e) = f.call1((pyo3::types::PyString::intern(py, text),)) {
-                stash(py, e, f);
-            }
+            let r = f.call1((pyo3::types::PyString::intern(py, text),));
+            after_call(py, r.map(drop), f);
         });
     }
 
@@ -109,9 +123,7 @@ impl Slot {
         Python::attach(|py| {
             let Some(f) = self.get(py) else { return };
             let f = f.bind(py);
-            if let Err(e) = f.call0() {
-                stash(py, e, f);
-            }
+            after_call(py, f.call0().map(drop), f);
         });
     }
 }

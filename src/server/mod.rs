@@ -9,4 +9,4 @@ pub mod run;
 
 pub use factory::{build_devices, build_devices_in, BuildError, BuildNote};
 pub use options::{parse_args, ServerCommand, ServerOptions, SleepPolicy};
-pub use run::ServerLoop;
+pub use run::{raise_descriptor_limit, ServerLoop};

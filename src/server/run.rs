@@ -135,3 +135,21 @@ impl ServerLoop {
 
 /// How long [`ServerLoop::wait`] keeps polling without sleeping after traffic, by default.
 pub const DEFAULT_BUSY_WINDOW: Duration = Duration::from_millis(2);
+
+/// Descriptors a full server needs: three per client on the UDP path (TCP, UDP in, UDP out)
+/// for [`Limits::max_connections`](crate::Limits::max_connections) clients, call-backs in
+/// progress, devices and logs.
+const DESCRIPTORS_WANTED: u64 = 4096;
+
+/// Raises this process's soft limit on open descriptors towards [`DESCRIPTORS_WANTED`] (never
+/// above the hard limit, never lowering it): the common default of 1,024 is short of what 255
+/// clients and a burst of call-backs take. Returns the soft limit in force afterwards.
+pub fn raise_descriptor_limit() -> Option<u64> {
+    use nix::sys::resource::{getrlimit, setrlimit, Resource};
+    let (soft, hard) = getrlimit(Resource::RLIMIT_NOFILE).ok()?;
+    let want = DESCRIPTORS_WANTED.min(hard);
+    if soft < want && setrlimit(Resource::RLIMIT_NOFILE, want, hard).is_ok() {
+        return Some(want);
+    }
+    Some(soft)
+}

@@ -127,3 +127,56 @@ def test_bad_arguments():
     with pytest.raises(ValueError, match="timeout must be"):
         t.wait(-1.0)
     assert t.wait(0.0) in (True, False)
+
+
+@pytest.mark.parametrize("control", ["rate", "seek", "play_to", "play_one", "reset", "queries"])
+def test_every_replay_control_from_inside_a_callback(recorded_log, control):
+    """Issue 29, item 1: a control called from a pose callback used to panic
+    (PanicException) and break the remote for good."""
+    t = vrpn.TrackerRemote(f"Tracker0@file:{recorded_log}")
+    r = t.replay
+    poses = []
+
+    def cb(p):
+        poses.append(p.time)
+        if len(poses) != 5:
+            return
+        if control == "rate":
+            r.rate = 2.0
+        elif control == "seek":
+            assert r.seek(r.length / 2)
+        elif control == "play_to":
+            r.play_to(r.length / 2)
+        elif control == "play_one":
+            assert r.play_one()
+        elif control == "reset":
+            r.reset()
+        else:
+            assert not r.eof and 0.0 <= r.position < r.length and r.start_time > 0
+
+    t.on_pose(cb)
+    r.rate = 0.0
+    r.play_to(0.2)
+    n = len(poses)
+    assert n >= 5
+    if control == "seek":
+        # Nothing between the 5th pose and the middle of the log.
+        assert abs(r.position - r.length / 2) < 1e-3
+        assert poses[5:] == []
+    if control == "play_to":
+        assert abs(r.position - r.length / 2) < 1e-3
+        assert all(a <= b for a, b in zip(poses, poses[1:]))
+    if control == "reset":
+        # Back to the start when the callback returned; the play-to ended with the old
+        # position.
+        assert n == 5 and r.position < 0.2
+    # The remote still works: the rest plays, in order, and a reset from outside too.
+    r.play_to(r.length + 1.0)
+    assert r.eof and len(poses) > n
+    if control == "reset":
+        assert poses[5] == poses[0], "the replay started over after the callback"
+    r.reset()
+    assert not r.eof
+    before = len(poses)
+    r.play_to(0.2)
+    assert len(poses) > before

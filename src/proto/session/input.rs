@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::{Kind, Session};
 use crate::proto::buffers::DatagramInbox;
 use crate::proto::endpoint::Phase;
-use crate::proto::server::{Decision, Ignored, RequestPolicy};
+use crate::proto::server::{Decision, Ignored, RequestPolicy, CALLBACK_PATIENCE};
 use crate::proto::{DropReason, IoRequest, NoticeKind, PeerId, Severity};
 use crate::time::Now;
 use crate::wire;
@@ -76,9 +76,10 @@ impl Session {
         }
         if !busy && self.pending_callbacks() >= limits.max_pending_callbacks {
             // Call-backs that hang (a host that drops SYNs) must not hold every slot until
-            // their connect times out: the oldest gives way. A real call-back completes in a
-            // round trip, long before a rate-limited flood can push it out.
-            self.abandon_oldest_callback();
+            // their connect times out: the oldest gives way once it has shown it will not
+            // complete soon. One that may still complete in a round trip is kept (the new
+            // request is ignored, and its client asks again).
+            self.abandon_stale_callback(now.mono);
         }
         let (pending, live) = (self.pending_callbacks(), self.live_peers());
         let Kind::Server(policy) = &mut self.kind else {
@@ -120,19 +121,25 @@ impl Session {
         true
     }
 
-    /// Gives up the call-back that has been connecting longest, without a notice of its own
-    /// (the request summary counts it).
-    fn abandon_oldest_callback(&mut self) {
+    /// Gives up the call-back that has been connecting longest, if that is longer than
+    /// [`CALLBACK_PATIENCE`], without a notice of its own (the request summary counts it).
+    fn abandon_stale_callback(&mut self, now: Instant) {
+        let connect_timeout = self.limits.connect_timeout;
         let oldest = self
             .peers
             .iter()
             .flatten()
             .filter(|p| p.callback && p.phase == Phase::Connecting)
-            .min_by_key(|p| p.deadline)
-            .map(|p| p.id);
-        let Some(id) = oldest else {
+            .filter_map(|p| Some((p.deadline?, p.id)))
+            .min_by_key(|&(deadline, _)| deadline);
+        let Some((deadline, id)) = oldest else {
             return;
         };
+        // A call-back's deadline is its start plus the connect timeout.
+        let started = deadline.checked_sub(connect_timeout).unwrap_or(deadline);
+        if now.saturating_duration_since(started) < CALLBACK_PATIENCE {
+            return;
+        }
         if let Some(slot) = self.peers.get_mut(id.slot) {
             *slot = None;
         }
@@ -376,5 +383,80 @@ impl Session {
             inbox.filled(count);
             self.input_pending = true;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::net::Ipv4Addr;
+    use std::time::Duration;
+
+    use super::*;
+    use crate::proto::Limits;
+
+    fn from(i: u8) -> SocketAddrV4 {
+        SocketAddrV4::new(Ipv4Addr::new(127, 0, 1, i), 5000)
+    }
+
+    fn connects(s: &mut Session) -> usize {
+        std::iter::from_fn(|| s.poll_io())
+            .filter(|r| matches!(r, IoRequest::Connect { .. }))
+            .count()
+    }
+
+    fn closes(s: &mut Session) -> usize {
+        std::iter::from_fn(|| s.poll_io())
+            .filter(|r| matches!(r, IoRequest::Close { .. }))
+            .count()
+    }
+
+    #[test]
+    fn a_call_back_about_to_complete_is_never_given_up() {
+        let limits = Limits {
+            max_pending_callbacks: 4,
+            ..Limits::default()
+        };
+        let mut s = Session::server(limits, None);
+        let t0 = Now::read();
+        for i in 0..4 {
+            s.handle_request(t0, from(i), b"127.0.0.1 4000\0");
+        }
+        assert_eq!(connects(&mut s), 4);
+        // Full of young call-backs: the new request waits for its client's next one.
+        let soon = t0.plus(CALLBACK_PATIENCE / 2);
+        s.handle_request(soon, from(9), b"127.0.0.1 4000\0");
+        assert_eq!(closes(&mut s), 0, "a young call-back was given up");
+        assert_eq!(s.pending_callbacks(), 4);
+        // Once the oldest has hung for longer than the patience, it gives way.
+        let late = t0.plus(CALLBACK_PATIENCE + Duration::from_millis(1));
+        s.handle_request(late, from(9), b"127.0.0.1 4000\0");
+        let io: Vec<IoRequest> = std::iter::from_fn(|| s.poll_io()).collect();
+        assert_eq!(
+            io.iter()
+                .filter(|r| matches!(r, IoRequest::Close { .. }))
+                .count(),
+            1
+        );
+        assert!(io.iter().any(|r| matches!(
+            r,
+            IoRequest::Connect { addr, .. } if *addr == SocketAddrV4::new(*from(9).ip(), 4000)
+        )));
+        assert_eq!(s.pending_callbacks(), 4);
+    }
+
+    #[test]
+    fn a_burst_of_every_client_is_called_back_at_once() {
+        let mut s = Session::server(Limits::default(), None);
+        let t0 = Now::read();
+        for i in 0..=254u8 {
+            s.handle_request(t0, from(i), b"127.0.0.1 4000\0");
+        }
+        assert_eq!(connects(&mut s), 255);
+        assert!(
+            !s.queue
+                .iter()
+                .any(|d| matches!(d, crate::proto::Delivery::Notice(_))),
+            "a notice about a burst of legitimate clients"
+        );
     }
 }

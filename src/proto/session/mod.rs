@@ -145,6 +145,8 @@ pub struct Session {
     pub(crate) clock_names_seen: bool,
     /// Client: the logs to ask the server for at the next connect.
     pub(crate) remote_log_request: Option<RemoteLogRequest>,
+    /// Replay: a jump is under way; the user messages it passes over are not delivered.
+    pub(crate) replay_skipping: bool,
 }
 
 impl Session {
@@ -179,6 +181,7 @@ impl Session {
             clock_ids: None,
             clock_names_seen: false,
             remote_log_request: None,
+            replay_skipping: false,
         }
     }
 
@@ -397,6 +400,24 @@ impl Session {
             Kind::File(r) => Some(r),
             _ => None,
         }
+    }
+
+    /// The limits this session was made with.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Whether a peer used up its message budget in this pass, so that input may be left
+    /// for the next one (it is due at once).
+    pub fn input_left_over(&self) -> bool {
+        let budget = self.limits.max_messages_per_peer_per_loop;
+        self.peers.iter().flatten().any(|p| p.budget >= budget)
+    }
+
+    /// Replay: while set, the user messages that come due are consumed without being
+    /// delivered (a jump); it ends by itself where nothing more is due.
+    pub fn set_replay_skipping(&mut self, skip: bool) {
+        self.replay_skipping = skip && self.is_replay();
     }
 
     /// Whether deliveries are waiting (after input that closed a peer, say).

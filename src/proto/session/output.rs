@@ -49,20 +49,28 @@ impl Session {
         p.udp_tx.front()
     }
 
-    /// The datagrams waiting for `peer`, to send oldest first (`front`, then `pop_front`
-    /// once sent or lost); `None` when none wait. Without an open channel they are discarded
-    /// here (unreliable). One lookup for the whole queue, for the shell's flush.
+    /// The datagrams waiting for `peer` over an open channel, if any: for a send that batches
+    /// every peer's datagrams into one system call. Take out what went with
+    /// [`udp_consume`](Self::udp_consume).
     #[inline]
-    pub(crate) fn udp_outbox(&mut self, peer: PeerId) -> Option<&mut DatagramQueue> {
-        let p = self.peer_mut(peer)?;
-        if p.udp_tx.is_empty() {
-            return None;
+    pub(crate) fn udp_queue(&self, peer: PeerId) -> Option<&DatagramQueue> {
+        self.peer(peer)
+            .filter(|p| p.udp_ready && !p.udp_tx.is_empty())
+            .map(|p| &p.udp_tx)
+    }
+
+    /// Up to `n` of the datagrams [`udp_queue`](Self::udp_queue) showed went out (or were
+    /// lost); returns how many were taken out.
+    #[inline]
+    pub(crate) fn udp_consume(&mut self, peer: PeerId, n: usize) -> usize {
+        match self.peer_mut(peer) {
+            Some(p) if p.udp_ready => {
+                let k = n.min(p.udp_tx.len());
+                p.udp_tx.pop_many(k);
+                k
+            }
+            _ => 0,
         }
-        if !p.udp_ready {
-            p.udp_tx.clear();
-            return None;
-        }
-        Some(&mut p.udp_tx)
     }
 
     /// The datagram from [`udp_front`](Self::udp_front) went out (or was lost).

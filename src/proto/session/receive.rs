@@ -65,8 +65,7 @@ impl Session {
                 let d = self.next_from_peer(now, i);
                 if d.is_some() {
                     self.cursor = i;
-                    if let Some(p) = self.peers[i].as_mut() {
-                        p.budget += 1;
+                    if let Some(p) = self.peers[i].as_ref() {
                         // The only peer has nothing more buffered: the next poll need not walk
                         // (a pass that received one report would otherwise walk twice).
                         if n == 1 && p.input_drained() {
@@ -90,9 +89,14 @@ impl Session {
 
     /// The next delivery from the bytes buffered for the peer in `slot`.
     ///
+    /// Every message taken counts against the peer's budget for the pass, whether or not it
+    /// brings a delivery (clock queries, descriptions and messages of unknown types bring
+    /// none), so no peer keeps a pass busy: once it is spent, the rest waits for the next.
+    ///
     /// The steady-state path (a described message on the stream or in a datagram) stays in
     /// this function; set-up and every kind of bad input are handled out of line.
     fn next_from_peer(&mut self, now: &dyn TimeSource, slot: usize) -> Option<Delivery> {
+        let budget = self.limits.max_messages_per_peer_per_loop;
         loop {
             let p = self.peers[slot].as_mut()?;
             match p.phase {
@@ -103,11 +107,15 @@ impl Session {
                 },
                 Phase::Describing | Phase::Connected => {}
             }
+            if p.budget >= budget {
+                return None;
+            }
             let rx = p.rx.as_mut()?;
             match rx.next_message() {
                 Some(Ok((h, payload))) => {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
+                    p.budget += 1;
                     // Returned as built (a delivery copied on its way out would be read
                     // back before its stores land: see handle_message).
                     let d = self.handle_message(slot, h, len, Via::Tcp, now);
@@ -159,6 +167,7 @@ impl Session {
                     let len = payload.len();
                     self.scratch[..len].copy_from_slice(payload);
                     inbox.advance(advance);
+                    p.budget += 1;
                     let d = self.handle_message(slot, h, len, Via::Udp, now);
                     if d.is_some() {
                         return d;
@@ -287,6 +296,8 @@ impl Session {
                 return Some(Delivery::Event(ConnectionEvent::DroppedConnection));
             }
             let Some(due) = replay.next_due() else {
+                // A jump ends where nothing more is due.
+                self.replay_skipping = false;
                 if let Some(e) = replay.take_error() {
                     let text = format!(
                         "replay stopped at damaged data (every whole message before it was \
@@ -320,7 +331,7 @@ impl Session {
                 seq: 0,
             };
             let d = self.handle_message(0, h, len, Via::Log, now);
-            if d.is_some() {
+            if d.is_some() && !self.replay_skipping {
                 return d;
             }
             if let Some((reason, text)) = self.refusal.take() {
