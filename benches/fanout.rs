@@ -67,7 +67,8 @@ fn start_server(program: &str, cfg: &std::path::Path, pin: bool) -> Server {
     let port = line
         .split("on port ")
         .nth(1)
-        .and_then(|s| s.trim().trim_end_matches('.').parse().ok())
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.trim_end_matches('.').parse().ok())
         .unwrap_or_else(|| panic!("no port in {line:?}"));
     std::thread::spawn(move || for _ in out.lines() {});
     let stderr: Arc<Mutex<Vec<String>>> = Arc::default();

@@ -12,6 +12,7 @@ use crate::driver::Driver;
 
 pub mod cerealbox;
 pub mod controls;
+pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
@@ -31,6 +32,7 @@ pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod joylin;
 pub mod magellan;
+pub mod one_euro;
 pub mod pinchglove;
 pub mod python;
 pub mod radamec;
@@ -67,11 +69,13 @@ pub static REGISTRY: &[&Driver] = &[
     // Layered devices (clients of other devices).
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
+    &one_euro::DRIVER,
     // Relays of other servers' devices.
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
     &dyna::DRIVER,
+    &dtrack::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &immersionbox::DRIVER,

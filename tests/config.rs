@@ -256,7 +256,12 @@ fn sample_config_commented_examples_parse() {
             "vrpn_ImmersionBox",
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
-            "vrpn_Button_Python"
+            "vrpn_Button_Python",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_FilterOneEuro"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

@@ -17,6 +17,7 @@ pub mod lifecycle;
 pub mod registry;
 pub mod status;
 pub mod text;
+pub mod udp;
 
 pub use lifecycle::{
     Cx, Lifecycle, Pause, Phase, Protocol, Recovery, Reset, Retry, Stats, Supervision,

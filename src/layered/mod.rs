@@ -15,6 +15,7 @@ use crate::connection::Connection;
 use crate::devices::analog::AnalogRemote;
 use crate::devices::base::RemoteCore;
 use crate::devices::button::ButtonRemote;
+use crate::devices::tracker::TrackerRemote;
 use crate::error::Error;
 use crate::time::TimeVal;
 
@@ -113,13 +114,13 @@ pub fn quat_from_euler(yaw: f64, pitch: f64, roll: f64) -> [f64; 4] {
 }
 
 /// quatlib `q_invert`: the conjugate divided by the squared norm.
-fn quat_invert(q: &[f64; 4]) -> [f64; 4] {
+pub fn quat_invert(q: &[f64; 4]) -> [f64; 4] {
     let n = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     [-q[0] * n, -q[1] * n, -q[2] * n, q[3] * n]
 }
 
 /// quatlib `q_mult`: the Hamilton product `a ⊗ b`, (x, y, z, w) layout.
-fn quat_mult(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+pub fn quat_mult(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
     let (ax, ay, az, aw) = (a[0], a[1], a[2], a[3]);
     let (bx, by, bz, bw) = (b[0], b[1], b[2], b[3]);
     [
@@ -227,6 +228,46 @@ impl ButtonSource {
                 remote: {
                     let (device, conn) = RemoteCore::open_in(server.reactor().as_ref(), n)?;
                     ButtonRemote::on_connection(&device, &conn)?
+                },
+                local: false,
+            },
+        })
+    }
+
+    /// See [`AnalogSource::poll`].
+    pub(crate) fn poll(&self) {
+        if !self.local {
+            let _ = self.remote.mainloop();
+        }
+    }
+
+    /// See [`AnalogSource::next_deadline`].
+    pub(crate) fn next_deadline(&self) -> Option<std::time::Instant> {
+        if self.local {
+            None
+        } else {
+            self.remote.connection().poll_timeout()
+        }
+    }
+}
+
+/// A tracker source of a layered device (a filter of another tracker's poses).
+pub(crate) struct TrackerSource {
+    pub(crate) remote: TrackerRemote,
+    local: bool,
+}
+
+impl TrackerSource {
+    pub(crate) fn open(src: &DeviceRef, server: &Connection) -> Result<TrackerSource, Error> {
+        Ok(match src {
+            DeviceRef::Local(n) => TrackerSource {
+                remote: TrackerRemote::on_connection(n, server)?,
+                local: true,
+            },
+            DeviceRef::Remote(n) => TrackerSource {
+                remote: {
+                    let (device, conn) = RemoteCore::open_in(server.reactor().as_ref(), n)?;
+                    TrackerRemote::on_connection(&device, &conn)?
                 },
                 local: false,
             },

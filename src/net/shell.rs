@@ -107,6 +107,10 @@ pub(crate) struct Shell {
     /// The one outbound UDP socket of every peer (unconnected, made with the first peer's
     /// channel): every peer's datagrams of a pass go out in one `sendmmsg`.
     udp_out: Option<UdpSocket>,
+    /// Where `udp_out` is connected (a client's one server, a server's first UDP client):
+    /// datagrams to it go without an address, through the socket's cached route and IP-id
+    /// counter; the others name their destination.
+    udp_out_peer: Option<SocketAddrV4>,
 }
 
 fn v4(a: SocketAddr) -> SocketAddrV4 {
@@ -172,6 +176,7 @@ impl Shell {
             peers: Vec::new(),
             request_buf: [0; 256],
             udp_out: None,
+            udp_out_peer: None,
         }
     }
 
@@ -208,6 +213,7 @@ impl Shell {
             peers: Vec::new(),
             request_buf: [0; 256],
             udp_out: None,
+            udp_out_peer: None,
         })
     }
 
@@ -250,6 +256,7 @@ impl Shell {
             peers: Vec::new(),
             request_buf: [0; 256],
             udp_out: None,
+            udp_out_peer: None,
         };
         Ok((shell, announced))
     }
@@ -519,6 +526,20 @@ impl Shell {
                     if self.udp_out.is_none() {
                         self.udp_out = open_udp_out().ok();
                     }
+                    // Connect the socket to this peer unless another live peer holds that
+                    // fast path already (a client's one server, or a server's first client;
+                    // datagrams to the others carry their address).
+                    let taken = self.udp_out_peer.is_some_and(|held| {
+                        held != addr
+                            && self
+                                .peers
+                                .iter()
+                                .flatten()
+                                .any(|p| p.id != peer && p.udp_dest == Some(held))
+                    });
+                    if let (false, Some(s)) = (taken, &self.udp_out) {
+                        self.udp_out_peer = s.connect(SocketAddr::V4(addr)).ok().map(|_| addr);
+                    }
                     let have_socket = self.udp_out.is_some();
                     let ok = match self.peer_io(peer) {
                         Some(p) if have_socket => {
@@ -652,8 +673,9 @@ impl Shell {
                 let (Some(dest), Some(queue)) = (p.udp_dest, session.udp_queue(p.id)) else {
                     continue;
                 };
+                let to = (self.udp_out_peer != Some(dest)).then_some(dest);
                 for datagram in queue.iter() {
-                    if !batch.push(dest, datagram) {
+                    if !batch.push(to, datagram) {
                         break 'fill;
                     }
                 }

@@ -123,9 +123,10 @@ impl<'a> SendBatch<'a> {
         }
     }
 
-    /// Adds a datagram; false (and nothing added) when the batch is full.
+    /// Adds a datagram for `to` (`None`: the address the socket is connected to, which
+    /// spares the kernel a route lookup); false (and nothing added) when the batch is full.
     #[inline]
-    pub(crate) fn push(&mut self, to: SocketAddrV4, bytes: &'a [u8]) -> bool {
+    pub(crate) fn push(&mut self, to: Option<SocketAddrV4>, bytes: &'a [u8]) -> bool {
         if self.len == SEND_BATCH {
             return false;
         }
@@ -134,11 +135,13 @@ impl<'a> SendBatch<'a> {
             iov_len: bytes.len(),
         });
         // SAFETY: sockaddr_in is plain data; all-zero is a valid value (and zero padding
-        // is what the kernel expects in sin_zero).
+        // is what the kernel expects in sin_zero). Family 0 marks "no address".
         let mut a: libc::sockaddr_in = unsafe { std::mem::zeroed() };
-        a.sin_family = libc::AF_INET as libc::sa_family_t;
-        a.sin_port = to.port().to_be();
-        a.sin_addr.s_addr = u32::from(*to.ip()).to_be();
+        if let Some(to) = to {
+            a.sin_family = libc::AF_INET as libc::sa_family_t;
+            a.sin_port = to.port().to_be();
+            a.sin_addr.s_addr = u32::from(*to.ip()).to_be();
+        }
         self.names[self.len].write(a);
         self.len += 1;
         true
@@ -146,6 +149,47 @@ impl<'a> SendBatch<'a> {
 
     pub(crate) fn len(&self) -> usize {
         self.len
+    }
+
+    /// A batch of one (a reply in a round trip): a plain `send`/`sendto`, which the kernel
+    /// takes with less copying in than a one-message `sendmmsg`.
+    fn send_one(&mut self, sock: &UdpSocket) -> usize {
+        use std::os::fd::AsRawFd;
+        loop {
+            // SAFETY: `iov[0]` and `names[0]` were initialised by `push` (len is 1); the
+            // bytes are borrowed for 'a and outlive the call; the name, when there is one,
+            // is a complete sockaddr_in.
+            let r = unsafe {
+                let iov = self.iov[0].assume_init_ref();
+                let name = self.names[0].as_ptr();
+                if (*name).sin_family != 0 {
+                    libc::sendto(
+                        sock.as_raw_fd(),
+                        iov.iov_base,
+                        iov.iov_len,
+                        libc::MSG_DONTWAIT,
+                        name.cast(),
+                        std::mem::size_of::<libc::sockaddr_in>() as _,
+                    )
+                } else {
+                    libc::send(
+                        sock.as_raw_fd(),
+                        iov.iov_base,
+                        iov.iov_len,
+                        libc::MSG_DONTWAIT,
+                    )
+                }
+            };
+            if r >= 0 {
+                return 1;
+            }
+            match io::Error::last_os_error().kind() {
+                io::ErrorKind::WouldBlock => return 0,
+                io::ErrorKind::Interrupted => continue,
+                // Lost, as an unreliable datagram may be.
+                _ => return 1,
+            }
+        }
     }
 
     /// Sends the batch in order with `sendmmsg`; returns how many datagrams the kernel took
@@ -157,6 +201,9 @@ impl<'a> SendBatch<'a> {
         let mut msgs: [MaybeUninit<libc::mmsghdr>; SEND_BATCH] =
             // SAFETY: an array of `MaybeUninit` needs no initialisation.
             unsafe { MaybeUninit::uninit().assume_init() };
+        if self.len == 1 {
+            return self.send_one(sock);
+        }
         let mut sent = 0;
         while sent < self.len {
             let n = self.len - sent;
@@ -166,8 +213,12 @@ impl<'a> SendBatch<'a> {
                 // `self.len`, which outlive the call; the bytes they point at are borrowed
                 // for 'a, which outlives `self`.
                 let mut h: libc::mmsghdr = unsafe { std::mem::zeroed() };
-                h.msg_hdr.msg_name = self.names[sent + k].as_mut_ptr().cast();
-                h.msg_hdr.msg_namelen = std::mem::size_of::<libc::sockaddr_in>() as _;
+                let name = self.names[sent + k].as_mut_ptr();
+                // SAFETY: initialised by `push` for every index below `self.len`.
+                if unsafe { (*name).sin_family } != 0 {
+                    h.msg_hdr.msg_name = name.cast();
+                    h.msg_hdr.msg_namelen = std::mem::size_of::<libc::sockaddr_in>() as _;
+                }
                 h.msg_hdr.msg_iov = self.iov[sent + k].as_mut_ptr();
                 h.msg_hdr.msg_iovlen = 1;
                 slot.write(h);
@@ -202,7 +253,7 @@ impl<'a> SendBatch<'a> {
 /// Portable fallback: one `send_to` per datagram.
 #[cfg(not(any(target_os = "linux", target_os = "android")))]
 pub(crate) struct SendBatch<'a> {
-    datagrams: Vec<(SocketAddrV4, &'a [u8])>,
+    datagrams: Vec<(Option<SocketAddrV4>, &'a [u8])>,
 }
 
 #[cfg(not(any(target_os = "linux", target_os = "android")))]
@@ -213,7 +264,7 @@ impl<'a> SendBatch<'a> {
         }
     }
 
-    pub(crate) fn push(&mut self, to: SocketAddrV4, bytes: &'a [u8]) -> bool {
+    pub(crate) fn push(&mut self, to: Option<SocketAddrV4>, bytes: &'a [u8]) -> bool {
         if self.datagrams.len() == SEND_BATCH {
             return false;
         }
@@ -228,7 +279,11 @@ impl<'a> SendBatch<'a> {
     pub(crate) fn send(&mut self, sock: &UdpSocket) -> usize {
         let mut sent = 0;
         for (to, bytes) in &self.datagrams {
-            match sock.send_to(bytes, std::net::SocketAddr::V4(*to)) {
+            let r = match to {
+                Some(to) => sock.send_to(bytes, std::net::SocketAddr::V4(*to)),
+                None => sock.send(bytes),
+            };
+            match r {
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
                 _ => sent += 1,
             }
