@@ -174,3 +174,68 @@ fn malformed_lines_name_file_line_and_problem() {
         }
     );
 }
+
+/// `vrpn_server --list-devices`: each node with the lines the drivers suggest for it, every
+/// one of them a line the server accepts.
+mod suggestions {
+    use crate::hid::fake::FakeTree;
+    use crate::hid::list::{list, render};
+
+    #[test]
+    fn every_node_with_the_lines_that_serve_it() {
+        let t = FakeTree::new();
+        t.add_hidraw(0, 0x046d, 0xc626, 0, "3Dconnexion SpaceNavigator", "");
+        t.set_report_descriptor(0, &crate::drivers::hid_generic::sim::spacenavigator());
+        t.add_hidraw(1, 0x1234, 0x5678, 0, "Some Vendor Thing", "");
+        t.add_input(
+            2,
+            "USB Optical Mouse",
+            0x046d,
+            0xc077,
+            "17",
+            "70000 0 0 0 0",
+            "103",
+            "",
+        );
+        t.add_input(
+            3,
+            "AT Translated Set 2 keyboard",
+            1,
+            1,
+            "120013",
+            "3ff0000",
+            "",
+            "",
+        );
+        let listed = list(&t.tree(), crate::drivers::SUGGESTERS);
+        assert_eq!(listed.len(), 4);
+        assert_eq!(
+            listed[0].lines,
+            vec![
+                "vrpn_3DConnexion_Navigator SpaceMouse0".to_string(),
+                "vrpn_HID_Generic Device0 046d:c626 0".to_string()
+            ]
+        );
+        assert!(listed[1].lines.is_empty());
+        assert_eq!(
+            listed[2].lines,
+            vec!["vrpn_DevInput Mouse0 \"USB Optical Mouse\" relative".to_string()]
+        );
+        assert_eq!(
+            listed[3].lines,
+            vec![
+                "vrpn_DevInput Keyboard0 \"AT Translated Set 2 keyboard\" keyboard 255".to_string()
+            ]
+        );
+        let text = render(&listed);
+        assert!(
+            text.starts_with("hidraw0  usb 046d:c626 interface 0  \"3Dconnexion SpaceNavigator\"")
+        );
+        assert!(text.contains("    (no driver for it)\n"));
+        // Every suggested line is one the server accepts.
+        for l in listed.iter().flat_map(|l| l.lines.iter()) {
+            crate::server::config::parse_str(&format!("{l}\n"), "suggested").unwrap();
+        }
+        assert_eq!(render(&[]), "no HID or input devices found\n");
+    }
+}

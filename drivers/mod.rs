@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
 pub mod dtrack;
@@ -18,6 +19,8 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod glove5dt;
+pub mod glove5dt16;
 pub mod glove5dt_usb;
 #[cfg(test)]
 mod hid_config_tests;
@@ -36,11 +39,14 @@ pub mod one_euro;
 pub mod pinchglove;
 pub mod python;
 pub mod radamec;
+pub mod spaceball;
 pub mod spacemouse;
+pub mod streaming_arduino;
 pub mod tng3;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
+pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
 /// the family knows it (`vrpn_server --list-devices`). The generic HID driver comes last.
@@ -81,6 +87,12 @@ pub static REGISTRY: &[&Driver] = &[
     &immersionbox::DRIVER,
     &joylin::DRIVER,
     &magellan::DRIVER,
+    &spaceball::DRIVER,
+    &glove5dt::DRIVER,
+    &glove5dt16::DRIVER,
+    &streaming_arduino::DRIVER,
+    &zaber::DRIVER,
+    &biosciences::DRIVER,
     &pinchglove::DRIVER,
     &python::DRIVER,
     &radamec::DRIVER,
@@ -97,4 +109,16 @@ pub static REGISTRY: &[&Driver] = &[
     &hid_trackers::DRIVER,
     &evdev::DRIVER,
     &hid_generic::DRIVER,
+];
+
+/// The simulators `vrpn_device_sim` can run (the `sim` feature): a driver with a simulator
+/// adds its `sim::SIMULATOR` here.
+#[cfg(feature = "sim")]
+pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &cerealbox::sim::SIMULATOR,
+    &dyna::sim::SIMULATOR,
+    &fastrak::sim::SIMULATOR,
+    &flock::sim::SIMULATOR,
+    &joylin::sim::SIMULATOR,
+    &magellan::sim::SIMULATOR,
 ];

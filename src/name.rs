@@ -43,19 +43,85 @@ pub struct NameError {
     /// The name as given.
     pub name: String,
     /// What is wrong with it.
-    pub problem: String,
+    pub problem: NameProblem,
+}
+
+/// What is wrong with a device name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum NameProblem {
+    /// No `@` in the name of a remote device.
+    NoAt,
+    /// Nothing before the `@`.
+    EmptyDevice,
+    /// Nothing after the `@`.
+    EmptyLocation,
+    /// The device name is longer than a VRPN name may be.
+    DeviceTooLong,
+    /// The location after the `@` cannot be used.
+    Location(LocationError),
 }
 
 impl std::fmt::Display for NameError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "bad VRPN device name {:?}: {} (expected DEVICE@HOST, DEVICE@HOST:PORT, \
-             DEVICE@tcp://HOST:PORT, DEVICE@loopback: or DEVICE@file:PATH)",
-            self.name, self.problem
+        write!(f, "bad VRPN device name {:?}: {}", self.name, self.problem)?;
+        if self.problem == NameProblem::NoAt {
+            write!(
+                f,
+                ": a remote device is named DEVICE@HOST, for example \"{}@localhost\"",
+                self.name
+            )?;
+        }
+        f.write_str(
+            " (expected DEVICE@HOST, DEVICE@HOST:PORT, DEVICE@tcp://HOST:PORT, \
+             DEVICE@loopback: or DEVICE@file:PATH)",
         )
     }
 }
+
+impl std::fmt::Display for NameProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NameProblem::NoAt => f.write_str("it has no '@'"),
+            NameProblem::EmptyDevice => f.write_str("the device name before '@' is empty"),
+            NameProblem::EmptyLocation => f.write_str("the location after '@' is empty"),
+            NameProblem::DeviceTooLong => f.write_str("the device name is longer than 95 bytes"),
+            NameProblem::Location(e) => e.fmt(f),
+        }
+    }
+}
+
+/// Why the location after a name's `@` cannot be used.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LocationError {
+    /// `file:` with no path.
+    NoFile,
+    /// `x-vrsh:`: remote start over rsh/ssh.
+    RemoteStart,
+    /// `mpi:`.
+    Mpi,
+    /// No host name.
+    NoHost,
+    /// A port that is not a number from 1 to 65535 (the text as given).
+    BadPort(String),
+}
+
+impl std::fmt::Display for LocationError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LocationError::NoFile => f.write_str("the file: location names no file"),
+            LocationError::RemoteStart => {
+                f.write_str("x-vrsh: (remote start over rsh/ssh) is not supported")
+            }
+            LocationError::Mpi => f.write_str("mpi: connections are not supported"),
+            LocationError::NoHost => f.write_str("no host name"),
+            LocationError::BadPort(p) => write!(f, "port {p:?} is not a number from 1 to 65535"),
+        }
+    }
+}
+
+impl std::error::Error for LocationError {}
 
 impl std::error::Error for NameError {}
 
@@ -73,9 +139,9 @@ const SCHEMES: [&str; 8] = [
 impl DeviceName {
     /// Parses `DEVICE@LOCATION`. Device names may contain spaces (`Rigid Body 1@host`).
     pub fn parse(name: &str) -> Result<DeviceName, NameError> {
-        let err = |problem: &str| NameError {
+        let err = |problem: NameProblem| NameError {
             name: name.to_string(),
-            problem: problem.to_string(),
+            problem,
         };
         let (device, location_text) = match (name.find('@'), name.rfind('@')) {
             (Some(first), Some(last)) => (&name[..first], &name[last + 1..]),
@@ -83,15 +149,16 @@ impl DeviceName {
             _ => (name, name),
         };
         if device.is_empty() {
-            return Err(err("the device name before '@' is empty"));
+            return Err(err(NameProblem::EmptyDevice));
         }
         if location_text.is_empty() {
-            return Err(err("the location after '@' is empty"));
+            return Err(err(NameProblem::EmptyLocation));
         }
         if device.len() > crate::wire::MAX_NAME_LEN {
-            return Err(err("the device name is longer than 95 bytes"));
+            return Err(err(NameProblem::DeviceTooLong));
         }
-        let location = Self::parse_location(location_text).map_err(|p| err(&p))?;
+        let location =
+            Self::parse_location(location_text).map_err(|e| err(NameProblem::Location(e)))?;
         Ok(DeviceName {
             device: device.to_string(),
             location_text: location_text.to_string(),
@@ -106,34 +173,31 @@ impl DeviceName {
         if !name.contains('@') && !name.is_empty() {
             return Err(NameError {
                 name: name.to_string(),
-                problem: format!(
-                    "it has no '@': a remote device is named DEVICE@HOST, for example \
-                     \"{name}@localhost\""
-                ),
+                problem: NameProblem::NoAt,
             });
         }
         Self::parse(name)
     }
 
     /// Parses the part after `@`.
-    pub fn parse_location(loc: &str) -> Result<Location, String> {
+    pub fn parse_location(loc: &str) -> Result<Location, LocationError> {
         if loc == "loopback:" || loc == "loopback" || loc.starts_with("loopback:") {
             return Ok(Location::Loopback);
         }
         if let Some(rest) = loc.strip_prefix("file:") {
             let path = rest.strip_prefix("//").unwrap_or(rest);
             if path.is_empty() {
-                return Err("the file: location names no file".into());
+                return Err(LocationError::NoFile);
             }
             return Ok(Location::File {
                 path: path.to_string(),
             });
         }
         if loc.contains("x-vrsh:") {
-            return Err("x-vrsh: (remote start over rsh/ssh) is not supported".into());
+            return Err(LocationError::RemoteStart);
         }
         if loc.starts_with("mpi:") {
-            return Err("mpi: connections are not supported".into());
+            return Err(LocationError::Mpi);
         }
         let tcp_only = loc.contains("tcp:");
         let after_scheme = SCHEMES
@@ -143,7 +207,7 @@ impl DeviceName {
         let host_end = after_scheme.find([':', '/']).unwrap_or(after_scheme.len());
         let host = &after_scheme[..host_end];
         if host.is_empty() {
-            return Err("no host name".into());
+            return Err(LocationError::NoHost);
         }
         let port = match after_scheme.rfind(':') {
             None => DEFAULT_PORT,
@@ -154,12 +218,7 @@ impl DeviceName {
                     .collect();
                 match digits.parse::<u32>() {
                     Ok(p) if (1..=65535).contains(&p) => p as u16,
-                    _ => {
-                        return Err(format!(
-                            "port {:?} is not a number from 1 to 65535",
-                            &after_scheme[i + 1..]
-                        ))
-                    }
+                    _ => return Err(LocationError::BadPort(after_scheme[i + 1..].to_owned())),
                 }
             }
         };

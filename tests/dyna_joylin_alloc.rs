@@ -8,7 +8,6 @@ use std::time::Duration;
 
 use vrpn::drivers::dyna::sim::{DynaSim, SimConfig};
 use vrpn::drivers::joylin::sim::{JoystickSim, SimConfig as JoySimConfig};
-use vrpn::drivers::joylin::JoylinDriver;
 use vrpn::sim::VirtualLine;
 
 use vrpn::server::config::parse_one;
@@ -66,7 +65,7 @@ fn joystick_streams_without_allocating() {
     let cfg: vrpn::drivers::joylin::Joylin = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = JoylinDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let analog = AnalogRemote::on_connection("Joy0", &conn).unwrap();
     let buttons = ButtonRemote::on_connection("Joy0", &conn).unwrap();
     let reports = Rc::new(Cell::new(0u64));
@@ -94,7 +93,7 @@ fn joystick_streams_without_allocating() {
     let reports = reports.get() - before;
     // 200 events a second for 5 s, each reported.
     assert!(reports >= 990, "{reports} reports");
-    assert!(line.driver.0.skipped_bytes() > 0);
+    assert!(line.driver.0.protocol().skipped_bytes() > 0);
     assert_eq!(
         allocations, 0,
         "allocations while streaming {reports} reports"

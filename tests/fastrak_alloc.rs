@@ -7,8 +7,9 @@ use std::cell::Cell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use vrpn::driver::Lifecycle;
 use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig};
-use vrpn::drivers::fastrak::FastrakDriver;
+use vrpn::drivers::fastrak::FastrakProtocol;
 use vrpn::serial::{PortKind, PortOps, SerialDriver};
 use vrpn::server::config::parse_one;
 use vrpn::sim::VirtualLine;
@@ -50,7 +51,7 @@ static GLOBAL: Counting = Counting;
 
 /// Counts allocations made inside the wrapped driver's calls only (the simulator and the
 /// virtual line allocate freely).
-struct Counted(FastrakDriver);
+struct Counted(Lifecycle<FastrakProtocol>);
 
 fn counted<T>(f: impl FnOnce() -> T) -> T {
     ENABLED.with(|e| e.set(true));
@@ -91,7 +92,7 @@ fn streaming_records_allocates_nothing() {
     let cfg: vrpn::drivers::fastrak::config::Fastrak = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = FastrakDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let tracker = TrackerRemote::on_connection("Isense900", &conn).unwrap();
     let wand_buttons = ButtonRemote::on_connection("Wand0", &conn).unwrap();
     let wand_analog = AnalogRemote::on_connection("Wand0", &conn).unwrap();

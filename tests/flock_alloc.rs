@@ -7,7 +7,7 @@ use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::drivers::flock::sim::{FlockSim, SimConfig};
-use vrpn::drivers::flock::{FlockDriver, FlockParallelPort};
+use vrpn::drivers::flock::FlockParallelPort;
 use vrpn::sim::{VirtualLine, VirtualLines};
 
 use vrpn::server::config::parse_one;
@@ -30,7 +30,7 @@ fn one_line_flock_streams_without_allocating() {
     let cfg: vrpn::drivers::flock::Flock = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = FlockDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
     let poses = pose_counter(&tracker);
     let mut line = VirtualLine::new(
@@ -54,7 +54,7 @@ fn one_line_flock_streams_without_allocating() {
     let allocations = COUNT.with(Cell::get);
     let poses = poses.get() - before;
     assert!(poses > 1900, "{poses} poses");
-    assert!(line.driver.0.skipped_bytes() >= 6);
+    assert!(line.driver.0.stats().skipped_bytes >= 6);
     assert_eq!(
         allocations, 0,
         "allocations while streaming {poses} records"

@@ -8,9 +8,7 @@ use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::drivers::cerealbox::sim::{self as cereal, CerealSim};
-use vrpn::drivers::cerealbox::CerealBoxDriver;
 use vrpn::drivers::magellan::sim::{self as magellan, MagellanSim};
-use vrpn::drivers::magellan::MagellanDriver;
 use vrpn::sim::VirtualLine;
 
 use vrpn::server::config::parse_one;
@@ -31,7 +29,7 @@ fn magellan_streams_without_allocating() {
     let cfg: vrpn::drivers::magellan::Magellan = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = MagellanDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let analog = AnalogRemote::on_connection("Magellan0", &conn).unwrap();
     let buttons = ButtonRemote::on_connection("Magellan0", &conn).unwrap();
     let (reports, r) = counter();
@@ -52,7 +50,11 @@ fn magellan_streams_without_allocating() {
     line.device.set_moving(true, now);
     line.run_for(Duration::from_millis(500));
     COUNT.with(|c| c.set(0));
-    let (r0, c0, p0) = (reports.get(), changes.get(), line.driver.0.probes());
+    let (r0, c0, p0) = (
+        reports.get(),
+        changes.get(),
+        line.driver.0.protocol().probes(),
+    );
     for i in 0..5 {
         line.run_for(Duration::from_secs(1));
         line.inject(b"\x01zz\r");
@@ -68,8 +70,8 @@ fn magellan_streams_without_allocating() {
     let (reports, changes) = (reports.get() - r0, changes.get() - c0);
     assert!(reports > 150, "{reports} analog reports");
     assert!(changes > 100, "{changes} button changes");
-    assert!(line.driver.0.probes() > p0);
-    assert!(line.driver.0.skipped_bytes() >= 5 * 4);
+    assert!(line.driver.0.protocol().probes() > p0);
+    assert!(line.driver.0.protocol().skipped_bytes() >= 5 * 4);
     assert_eq!(
         allocations, 0,
         "allocations while sending {reports} analog reports and {changes} button changes"
@@ -82,7 +84,7 @@ fn cerealbox_streams_without_allocating() {
     let cfg: vrpn::drivers::cerealbox::CerealBox = parse_one(text);
     vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
     let conn = Connection::new_loopback();
-    let driver = CerealBoxDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let analog = AnalogRemote::on_connection("Cereal0", &conn).unwrap();
     let buttons = ButtonRemote::on_connection("Cereal0", &conn).unwrap();
     let dials = DialRemote::on_connection("Cereal0", &conn).unwrap();
@@ -109,7 +111,7 @@ fn cerealbox_streams_without_allocating() {
         reports.get(),
         changes.get(),
         updates.get(),
-        line.driver.0.repolls(),
+        line.driver.0.protocol().repolls(),
     );
     for _ in 0..5 {
         line.run_for(Duration::from_millis(1003));
@@ -123,7 +125,7 @@ fn cerealbox_streams_without_allocating() {
         changes > 500 && updates > 500,
         "{changes} changes, {updates} updates"
     );
-    assert!(line.driver.0.repolls() >= p0 + 4);
+    assert!(line.driver.0.protocol().repolls() >= p0 + 4);
     assert_eq!(
         allocations, 0,
         "allocations while sending {reports} analog reports, {changes} button changes and \

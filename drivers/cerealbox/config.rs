@@ -1,11 +1,12 @@
 //! The `vrpn_CerealBox` line: its fields, its parser, what it serves and how it is built.
 
-use super::CerealBoxDriver;
+use super::CerealBoxProtocol;
 use crate::config::{ConfigError, ConfigLine};
 use crate::devices::ServerDevice;
 use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
-use crate::driver::serve_port;
+use crate::driver::{serve, Lifecycle};
 use crate::error::Error;
+use crate::Connection;
 
 /// `vrpn_CerealBox NAME PORT BAUD BUTTONS ANALOGS ENCODERS`: BG Systems CerealBox.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -47,6 +48,18 @@ pub(super) fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>
     }))
 }
 
+impl CerealBox {
+    /// The driver for this entry, with its Analog, Button and Dial served on `conn`, ready
+    /// for a port.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<CerealBoxProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.name,
+            CerealBoxProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
 impl DeviceSpec for CerealBox {
     fn name(&self) -> &str {
         &self.name
@@ -60,7 +73,7 @@ impl DeviceSpec for CerealBox {
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
-        let driver = CerealBoxDriver::new(self, cx.conn())?;
-        Ok(vec![serve_port(&self.port, driver, cx)])
+        let protocol = CerealBoxProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.name, &self.port, protocol, cx)])
     }
 }

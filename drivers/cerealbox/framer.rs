@@ -1,4 +1,5 @@
-//! Finding CerealBox records in the byte stream, one byte at a time.
+//! Finding CerealBox records in the byte stream, one byte at a time, with the shared framer
+//! ([`crate::driver::framing`]).
 //!
 //! A record starts with `p`, has the layout's length, carries only data characters
 //! (`0x21..=0x60`) and ends with LF. A byte that breaks these rules ends the record being
@@ -6,160 +7,49 @@
 //! costs at most the record it hits. The record's time is the arrival of its `p`.
 
 use super::record::{Layout, LF, MAX_DATA, MAX_RECORD, OFFSET, START};
-use crate::time::Now;
+use crate::driver::framing::{self, RecordFormat};
 
-/// Why bytes were dropped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Problem {
-    /// A byte other than `p` where a record should start.
-    NotRecordStart(u8),
-    /// A byte that is not a data character inside a record.
-    BadCharacter(u8),
-    /// The last byte of a record was not LF.
-    NoLineFeed(u8),
-}
+pub use crate::driver::framing::{Problem, Skipped};
 
-/// Bytes dropped before a record, and the first reason.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Skipped {
-    /// How many.
-    pub bytes: u64,
-    /// Why the first of them was dropped.
-    pub first: Problem,
-}
-
-/// One complete record and what was dropped before it.
+/// The shape of a box's records: their length depends on its layout.
 #[derive(Clone, Copy, Debug)]
-pub struct Framed {
-    bytes: [u8; MAX_RECORD],
+pub struct Format {
     len: usize,
-    /// When the poll woke for its `p`.
-    pub first_byte: Now,
-    /// Garbage dropped between the previous record and this one.
-    pub skipped: Option<Skipped>,
 }
 
-impl Framed {
-    /// The record, `p` and LF included.
-    pub fn bytes(&self) -> &[u8] {
-        &self.bytes[..self.len]
-    }
-}
-
-/// The framing state.
-#[derive(Debug)]
-pub struct Framer {
-    want: usize,
-    buf: [u8; MAX_RECORD],
-    len: usize,
-    first_byte: Option<Now>,
-    skipped: Option<Skipped>,
-    total_skipped: u64,
-}
-
-impl Framer {
-    /// Looking for records of `layout`.
-    pub fn new(layout: &Layout) -> Framer {
-        Framer {
-            want: layout.record_len(),
-            buf: [0; MAX_RECORD],
-            len: 0,
-            first_byte: None,
-            skipped: None,
-            total_skipped: 0,
-        }
-    }
-
-    /// Forgets any partial record and pending garbage count.
-    pub fn clear(&mut self) {
-        self.len = 0;
-        self.first_byte = None;
-        self.skipped = None;
-    }
-
-    /// Bytes dropped since construction.
-    pub fn total_skipped(&self) -> u64 {
-        self.total_skipped
-    }
-
-    /// True while part of a record has been read.
-    pub fn in_record(&self) -> bool {
-        self.len > 0
-    }
-
-    /// Takes one byte that arrived at `arrived`; returns a record when this byte completes one.
-    pub fn push(&mut self, b: u8, arrived: Now) -> Option<Framed> {
-        if self.len == 0 {
-            self.start(b, arrived);
-        } else if self.len + 1 == self.want {
-            if b != LF {
-                self.drop_partial(Problem::NoLineFeed(b));
-                self.start(b, arrived);
-                return None;
-            }
-            self.buf[self.len] = b;
-            self.len += 1;
-        } else if (OFFSET..=MAX_DATA).contains(&b) {
-            self.buf[self.len] = b;
-            self.len += 1;
-            return None;
-        } else {
-            self.drop_partial(Problem::BadCharacter(b));
-            self.start(b, arrived);
-            return None;
-        }
-        // Only the final LF completes a record (with no inputs a record is just `p` LF).
-        if self.len < self.want {
-            return None;
-        }
-        let framed = Framed {
-            bytes: self.buf,
-            len: self.want,
-            first_byte: self.first_byte.unwrap_or(arrived),
-            skipped: self.skipped.take(),
-        };
-        self.len = 0;
-        self.first_byte = None;
-        Some(framed)
-    }
-
-    fn start(&mut self, b: u8, arrived: Now) {
-        if b == START {
-            self.buf[0] = b;
-            self.len = 1;
-            self.first_byte = Some(arrived);
-        } else {
-            self.skip(1, Problem::NotRecordStart(b));
-        }
-    }
-
-    fn drop_partial(&mut self, why: Problem) {
-        let n = self.len as u64;
-        self.len = 0;
-        self.first_byte = None;
-        self.skip(n, why);
-    }
-
-    fn skip(&mut self, n: u64, why: Problem) {
-        self.total_skipped += n;
-        match &mut self.skipped {
-            Some(s) => s.bytes += n,
-            None => {
-                self.skipped = Some(Skipped {
-                    bytes: n,
-                    first: why,
-                })
-            }
+impl Format {
+    /// Records of `layout`.
+    pub fn new(layout: &Layout) -> Format {
+        Format {
+            len: layout.record_len(),
         }
     }
 }
+
+impl RecordFormat for Format {
+    fn start(&self, b: u8) -> Option<usize> {
+        (b == START).then_some(self.len)
+    }
+    fn is_data(&self, b: u8) -> bool {
+        (OFFSET..=MAX_DATA).contains(&b)
+    }
+    fn last(&self) -> u8 {
+        LF
+    }
+}
+
+/// One complete record (`p` and LF included) and what was dropped before it.
+pub type Framed = framing::Framed<MAX_RECORD>;
+
+/// The box's framer.
+pub type Framer = framing::Framer<Format, MAX_RECORD>;
 
 #[cfg(test)]
 mod tests {
     use std::time::{Duration, Instant};
 
     use super::*;
-    use crate::time::TimeVal;
+    use crate::time::{Now, TimeVal};
 
     fn at(ms: u64, base: Instant) -> Now {
         Now {
@@ -181,7 +71,7 @@ mod tests {
     #[test]
     fn records_in_pieces_keep_their_first_byte_time() {
         let base = Instant::now();
-        let mut f = Framer::new(&LAYOUT);
+        let mut f = Framer::new(Format::new(&LAYOUT));
         let (r, n) = LAYOUT.encode(0x5A, &[100, 4000], &[-3]);
         assert!(frame_all(&mut f, &r[..3], at(1, base)).is_empty());
         let got = frame_all(&mut f, &r[3..n], at(4, base));
@@ -194,7 +84,7 @@ mod tests {
     #[test]
     fn garbage_costs_only_the_record_it_hits() {
         let base = Instant::now();
-        let mut f = Framer::new(&LAYOUT);
+        let mut f = Framer::new(Format::new(&LAYOUT));
         let (r, n) = LAYOUT.encode(0xFF, &[0, 4095], &[77]);
         let rec = &r[..n];
         let mut stream = b"xx\n".to_vec();
@@ -222,7 +112,7 @@ mod tests {
         );
         assert_eq!(got[1].skipped.unwrap().first, Problem::BadCharacter(0x07));
         assert_eq!(got[1].skipped.unwrap().bytes, n as u64);
-        assert_eq!(got[2].skipped.unwrap().first, Problem::NoLineFeed(b'!'));
+        assert_eq!(got[2].skipped.unwrap().first, Problem::BadLastByte(b'!'));
         assert_eq!(got[2].skipped.unwrap().bytes, n as u64);
     }
 
@@ -234,7 +124,7 @@ mod tests {
             analogs: 0,
             encoders: 0,
         };
-        let mut f = Framer::new(&none);
+        let mut f = Framer::new(Format::new(&none));
         let got = frame_all(&mut f, b"p\npp\n", at(0, base));
         assert_eq!(got.len(), 2);
         assert_eq!(f.total_skipped(), 1);

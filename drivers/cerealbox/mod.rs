@@ -1,5 +1,6 @@
-//! BG Systems CerealBox on a serial line: a sans-IO [`SerialDriver`] and a device simulator
-//! (`sim`, with the `sim` feature).
+//! BG Systems CerealBox on a serial line: its `vrpn.cfg` line ([`config`]), its [`Protocol`] run
+//! by the shared [`Lifecycle`](crate::driver::Lifecycle), and a device simulator (`sim`, with
+//! the `sim` feature).
 //!
 //! # Configuration line served
 //!
@@ -30,7 +31,7 @@
 //! Opening the port starts the reset ([`reset`]), which ends by asking for a record. The box
 //! is polled: each good record is answered at once with the request for the next (`pE`).
 //! Records are found byte by byte ([`framer`]); dropped bytes are reported in a warning text
-//! at most once per [`NOTE_INTERVAL`]. A request that gets no record within the record's
+//! at most once a second. A request that gets no record within the record's
 //! transmission time plus [`REPOLL_MARGIN`] (a record lost to noise) is repeated, and
 //! [`WATCHDOG`] without a good record sends an error text and resets the box.
 //!
@@ -42,7 +43,9 @@
 //! * C++ stops polling after a damaged record and only recovers through the 2 s watchdog's
 //!   reset; here the request is repeated, so one damaged record costs one record.
 //! * Records are checked for data characters, not only for the `p` and the LF.
-//! * A reset reports the zeroed channels and released buttons (C++ zeroes them silently).
+//! * A reset reports nothing by itself: the values a client holds stay as the box last sent
+//!   them until its first record after the reset (C++ zeroes them silently; reporting zeros
+//!   would show values the box never sent, and held buttons would bounce).
 //! * Reset problems and the box type are announced by text messages instead of lines on the
 //!   server's standard output and error.
 
@@ -58,14 +61,14 @@ mod tests;
 
 use std::time::{Duration, Instant};
 
-use self::framer::{Framed, Framer, Problem, Skipped};
+use self::framer::{Format, Framed, Framer, Problem};
 use self::record::{revolutions, Layout, REQUEST};
-use self::reset::{Failure, Progress, ResetSequence};
+use self::reset::{Failure, Progress, ResetSequence, RETRY_PAUSE};
 use crate::devices::text::TextSeverity;
-use crate::driver::registry::Driver;
-use crate::driver::text::{with_text, Shown};
-use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::time::{Now, TimeVal};
+use crate::driver::text::Shown;
+use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Retry, Supervision};
+use crate::serial::{PortKind, PortSettings};
+use crate::time::TimeVal;
 use crate::{AnalogServer, ButtonServer, Connection, DialServer, Error};
 
 pub use self::config::CerealBox;
@@ -81,19 +84,9 @@ pub static DRIVER: Driver = Driver {
 pub const WATCHDOG: Duration = Duration::from_secs(2);
 /// Time a polled record may take beyond its transmission before the request is repeated.
 pub const REPOLL_MARGIN: Duration = Duration::from_millis(100);
-/// At most one note about dropped bytes per this interval.
-pub const NOTE_INTERVAL: Duration = Duration::from_secs(1);
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
-    Closed,
-    Resetting,
-    Streaming,
-}
-
-/// A CerealBox on one serial port.
-pub struct CerealBoxDriver {
-    name: String,
+/// The CerealBox's protocol. See the module documentation.
+pub struct CerealBoxProtocol {
     port: String,
     baud: u32,
     layout: Layout,
@@ -102,26 +95,19 @@ pub struct CerealBoxDriver {
     dials: DialServer,
     framer: Framer,
     reset: ResetSequence,
-    mode: Mode,
-    /// First byte of the last good record, or the end of the reset: the watchdog's start.
-    last_record: Option<Now>,
     poll_deadline: Option<Instant>,
     poll_timeout: Duration,
     box_type: Option<u8>,
-    records: u64,
     repolls: u64,
-    resets: u64,
-    unreported: Option<Skipped>,
-    last_note: Option<Instant>,
 }
 
-impl CerealBoxDriver {
-    /// The driver for a `vrpn_CerealBox` entry, with its Analog, Button and Dial served on
+impl CerealBoxProtocol {
+    /// The protocol of a `vrpn_CerealBox` entry, with its Analog, Button and Dial served on
     /// `conn`.
-    pub fn new(cfg: &CerealBox, conn: &Connection) -> Result<CerealBoxDriver, Error> {
-        if cfg.buttons > config::CerealBox::MAX_BUTTONS
-            || cfg.analogs > config::CerealBox::MAX_ANALOGS
-            || cfg.encoders > config::CerealBox::MAX_ENCODERS
+    pub fn new(cfg: &CerealBox, conn: &Connection) -> Result<CerealBoxProtocol, Error> {
+        if cfg.buttons > CerealBox::MAX_BUTTONS
+            || cfg.analogs > CerealBox::MAX_ANALOGS
+            || cfg.encoders > CerealBox::MAX_ENCODERS
         {
             return Err(Error::Unsupported(
                 "a CerealBox has at most 24 buttons, 8 analogs and 8 encoders",
@@ -134,26 +120,19 @@ impl CerealBoxDriver {
         };
         let bits = 10 * (layout.record_len() + REQUEST.len()) as u64 * 1_000_000;
         let transmission = Duration::from_micros(bits.div_ceil(u64::from(cfg.baud.max(1))));
-        Ok(CerealBoxDriver {
-            name: cfg.name.clone(),
+        Ok(CerealBoxProtocol {
             port: cfg.port.clone(),
             baud: cfg.baud,
             layout,
             analog: AnalogServer::new(&cfg.name, conn, layout.analogs)?,
             buttons: ButtonServer::new(&cfg.name, conn, layout.buttons)?,
             dials: DialServer::new(&cfg.name, conn, layout.encoders)?,
-            framer: Framer::new(&layout),
+            framer: Framer::new(Format::new(&layout)),
             reset: ResetSequence::new(&layout),
-            mode: Mode::Closed,
-            last_record: None,
             poll_deadline: None,
             poll_timeout: transmission + REPOLL_MARGIN,
             box_type: None,
-            records: 0,
             repolls: 0,
-            resets: 0,
-            unreported: None,
-            last_note: None,
         })
     }
 
@@ -182,19 +161,9 @@ impl CerealBoxDriver {
         &self.dials
     }
 
-    /// True once a reset succeeded and the box is polled.
-    pub fn is_streaming(&self) -> bool {
-        self.mode == Mode::Streaming
-    }
-
     /// The box type letter from the last banner.
     pub fn box_type(&self) -> Option<u8> {
         self.box_type
-    }
-
-    /// Good records reported since construction.
-    pub fn records(&self) -> u64 {
-        self.records
     }
 
     /// Requests repeated because no record came.
@@ -202,128 +171,84 @@ impl CerealBoxDriver {
         self.repolls
     }
 
-    /// Resets begun since construction (the first one included).
-    pub fn resets(&self) -> u64 {
-        self.resets
-    }
-
     /// Bytes dropped while looking for records, since construction.
     pub fn skipped_bytes(&self) -> u64 {
         self.framer.total_skipped()
     }
 
-    fn say(&self, severity: TextSeverity, args: std::fmt::Arguments<'_>) {
-        // A failed send is the connection's business (it reports and drops the peer).
-        with_text(args, |t| {
-            let _ = self.analog.send_text(severity, 0, t);
-        });
-    }
-
-    fn begin_reset(&mut self, now: Now, port: &mut PortOps) {
-        self.mode = Mode::Resetting;
-        self.resets += 1;
-        self.framer.clear();
-        self.last_record = None;
-        self.poll_deadline = None;
-        self.unreported = None;
-        self.analog.channels_mut().fill(0.0);
-        for i in 0..self.layout.buttons {
-            self.buttons.set_button(i, false);
-        }
-        let _ = self.analog.report_changes(Some(now.wall));
-        self.buttons.set_timestamp(now.wall);
-        let _ = self.buttons.report_changes_unfiltered();
-        self.reset.start(now, port);
-    }
-
-    fn progress(&mut self, p: Progress, now: Now) {
+    fn progress(&mut self, p: Progress, cx: &mut Cx<'_>) -> Reset {
         let sev = TextSeverity::Warning;
         match p {
-            Progress::Busy => {}
+            Progress::Busy => Reset::Working,
             Progress::Found(t) => {
                 self.box_type = Some(t);
-                self.say(
+                cx.say(
                     TextSeverity::Normal,
                     format_args!("vrpn_CerealBox: Box of type {} found", Shown(t)),
                 );
+                Reset::Working
             }
             Progress::Done => {
-                self.mode = Mode::Streaming;
-                self.last_record = Some(now);
-                self.poll_deadline = Some(now.mono + self.poll_timeout);
+                self.poll_deadline = Some(cx.now.mono + self.poll_timeout);
+                Reset::Done
             }
-            Progress::Failed(f) => match f {
-                Failure::NoBanner => {
-                    self.say(sev, format_args!("vrpn_CerealBox: No response from box"))
-                }
-                Failure::ShortBanner(n) => self.say(
-                    sev,
-                    format_args!("vrpn_CerealBox: Got {n} of 44 expected characters"),
-                ),
-                Failure::BadVersion([a, b, c]) => self.say(
-                    sev,
-                    format_args!(
-                        "vrpn_CerealBox: Bad EEPROM version (want 3.07, got {}.{}{})",
-                        a as char, b as char, c as char
+            Progress::Failed(f) => {
+                match f {
+                    Failure::NoBanner => {
+                        cx.say(sev, format_args!("vrpn_CerealBox: No response from box"))
+                    }
+                    Failure::ShortBanner(n) => cx.say(
+                        sev,
+                        format_args!("vrpn_CerealBox: Got {n} of 44 expected characters"),
                     ),
-                ),
-                Failure::NoAck => self.say(sev, format_args!("vrpn_CerealBox: No ack from box")),
-                Failure::ShortAck => self.say(
-                    sev,
-                    format_args!("vrpn_CerealBox: Got 1 of 2 expected ack characters"),
-                ),
-                Failure::BadAck(b) => self.say(
-                    sev,
-                    format_args!("vrpn_CerealBox: Bad ack: wanted 'a', got {}", Shown(b)),
-                ),
-            },
+                    Failure::BadVersion([a, b, c]) => cx.say(
+                        sev,
+                        format_args!(
+                            "vrpn_CerealBox: Bad EEPROM version (want 3.07, got {}.{}{})",
+                            a as char, b as char, c as char
+                        ),
+                    ),
+                    Failure::NoAck => cx.say(sev, format_args!("vrpn_CerealBox: No ack from box")),
+                    Failure::ShortAck => cx.say(
+                        sev,
+                        format_args!("vrpn_CerealBox: Got 1 of 2 expected ack characters"),
+                    ),
+                    Failure::BadAck(b) => cx.say(
+                        sev,
+                        format_args!("vrpn_CerealBox: Bad ack: wanted 'a', got {}", Shown(b)),
+                    ),
+                }
+                Reset::Failed(Retry::After(RETRY_PAUSE))
+            }
         }
     }
 
-    fn stream(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
+    fn stream(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
         for &b in bytes {
-            if let Some(framed) = self.framer.push(b, arrived) {
-                self.report(&framed, arrived, port);
+            if let Some(framed) = self.framer.push(b, cx.now) {
+                self.report(&framed, cx);
             }
         }
-    }
-
-    fn note_skipped(&mut self, skipped: Option<Skipped>, at: Now) {
-        if let Some(s) = skipped {
-            match &mut self.unreported {
-                Some(u) => u.bytes += s.bytes,
-                None => self.unreported = Some(s),
-            }
-        }
-        let Some(u) = self.unreported else { return };
-        if self.last_note.is_some_and(|t| at.mono < t + NOTE_INTERVAL) {
-            return;
-        }
-        self.last_note = Some(at.mono);
-        self.unreported = None;
-        let (what, b) = match u.first {
-            Problem::NotRecordStart(b) => ("looking for 'p'", b),
-            Problem::BadCharacter(b) => ("a bad character in a record", b),
-            Problem::NoLineFeed(b) => ("no line feed at the end of a record", b),
-        };
-        self.say(
-            TextSeverity::Warning,
-            format_args!(
-                "vrpn_CerealBox: skipped {} bytes to resynchronise (first: {what}, got {})",
-                u.bytes,
-                Shown(b)
-            ),
-        );
     }
 
     /// Asks for the next record, then decodes and reports this one.
-    fn report(&mut self, framed: &Framed, arrived: Now, port: &mut PortOps) {
-        port.write(REQUEST);
-        self.poll_deadline = Some(arrived.mono + self.poll_timeout);
+    fn report(&mut self, framed: &Framed, cx: &mut Cx<'_>) {
+        cx.write(REQUEST);
+        self.poll_deadline = Some(cx.now.mono + self.poll_timeout);
         let at = framed.first_byte;
-        self.note_skipped(framed.skipped, at);
-        self.last_record = Some(at);
-        self.records += 1;
+        if let Some(s) = framed.skipped {
+            let (what, b) = match s.first {
+                Problem::NotRecordStart(b) => ("looking for 'p'", b),
+                Problem::BadCharacter(b) => ("a bad character in a record", b),
+                Problem::BadLastByte(b) => ("no line feed at the end of a record", b),
+            };
+            cx.skipped(
+                s.bytes,
+                Self::KIND,
+                format_args!(" (first: {what}, got {})", Shown(b)),
+            );
+        }
+        cx.record(at);
         let rec = framed.bytes();
         let l = self.layout;
         for i in 0..l.analogs {
@@ -347,81 +272,80 @@ impl CerealBoxDriver {
         self.dials.set_timestamp(time);
         let _ = self.dials.report_changes();
     }
-
-    fn supervise(&mut self, now: Now, port: &mut PortOps) {
-        if self
-            .last_record
-            .is_some_and(|t| now.mono >= t.mono + WATCHDOG)
-        {
-            self.say(
-                TextSeverity::Error,
-                format_args!("Too long since last report, resetting"),
-            );
-            self.begin_reset(now, port);
-            return;
-        }
-        if self.poll_deadline.is_some_and(|t| now.mono >= t) {
-            port.write(REQUEST);
-            self.repolls += 1;
-            self.poll_deadline = Some(now.mono + self.poll_timeout);
-        }
-    }
 }
 
-impl SerialDriver for CerealBoxDriver {
-    fn name(&self) -> &str {
-        &self.name
-    }
+impl Protocol for CerealBoxProtocol {
+    const KIND: &'static str = "vrpn_CerealBox";
 
     fn port_kind(&self) -> PortKind {
         PortKind::Serial(PortSettings::n81(self.baud))
     }
 
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
-        self.begin_reset(now, port);
-    }
-
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let (p, used) = self.reset.received(bytes, arrived, port);
-                self.progress(p, arrived);
-                if self.mode == Mode::Streaming {
-                    self.stream(&bytes[used..], arrived, port);
-                }
-            }
-            Mode::Streaming => self.stream(bytes, arrived, port),
+    /// 2 s without a good record resets the box on the open port (as C++).
+    fn supervision(&self) -> Supervision {
+        Supervision {
+            watchdog: Some(WATCHDOG),
+            on_silence: Recovery::Reset,
+            ..Supervision::TRACKER
         }
     }
 
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let p = self.reset.poll(now, port);
-                self.progress(p, now);
-            }
-            Mode::Streaming => self.supervise(now, port),
+    /// Asks for the banner. Nothing is reported: the values stay as the box last sent them
+    /// until its first record after the reset.
+    fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
+        self.poll_deadline = None;
+        self.reset.start(cx.now, cx.port());
+        Reset::Working
+    }
+
+    fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
+        let (p, used) = self.reset.received(bytes, cx.now, cx.port());
+        let r = self.progress(p, cx);
+        if r == Reset::Done {
+            // The first record may follow the acknowledgement in the same read. (Bytes after
+            // the banner came before the configuration command went out: not its answer.)
+            self.stream(&bytes[used..], cx);
+        }
+        r
+    }
+
+    fn reset_poll(&mut self, cx: &mut Cx<'_>) -> Reset {
+        let p = self.reset.poll(cx.now);
+        self.progress(p, cx)
+    }
+
+    fn reset_deadline(&self) -> Option<Instant> {
+        self.reset.deadline()
+    }
+
+    fn received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        self.stream(bytes, cx);
+    }
+
+    /// A request that got no record in time (a record lost to noise) is repeated.
+    fn poll(&mut self, cx: &mut Cx<'_>) {
+        if self.poll_deadline.is_some_and(|t| cx.now.mono >= t) {
+            cx.write(REQUEST);
+            self.repolls += 1;
+            self.poll_deadline = Some(cx.now.mono + self.poll_timeout);
         }
     }
 
-    fn next_deadline(&self) -> Option<Instant> {
-        match self.mode {
-            Mode::Closed => None,
-            Mode::Resetting => self.reset.deadline(),
-            Mode::Streaming => {
-                let watchdog = self.last_record.map(|t| t.mono + WATCHDOG);
-                watchdog.into_iter().chain(self.poll_deadline).min()
-            }
-        }
+    fn deadline(&self) -> Option<Instant> {
+        self.poll_deadline
     }
 
-    fn closed(&mut self, _now: Now) {
-        self.mode = Mode::Closed;
+    /// The box's silence text (C++'s), instead of the trackers'.
+    fn silent(&mut self, _last_record: crate::time::Now, cx: &mut Cx<'_>) {
+        cx.say(
+            TextSeverity::Error,
+            format_args!("Too long since last report, resetting"),
+        );
+    }
+
+    fn stopped(&mut self) {
         self.reset.stop();
         self.framer.clear();
-        self.last_record = None;
         self.poll_deadline = None;
     }
 }

@@ -10,7 +10,7 @@
 //!
 //! Each answer has [`ANSWER_TIMEOUT`] (as C++ VRPN), but the reset moves on as soon as it
 //! arrives, so it takes a few milliseconds rather than C++'s fixed waits of up to 4 s. A
-//! failed attempt is reported and the next starts [`RETRY_PAUSE`] later.
+//! failed attempt is reported; the lifecycle starts the next [`RETRY_PAUSE`] later.
 
 use std::time::{Duration, Instant};
 
@@ -49,7 +49,7 @@ pub enum Progress {
     Found(u8),
     /// Acknowledged; the first record was requested.
     Done,
-    /// The attempt failed; the next starts after [`RETRY_PAUSE`].
+    /// The attempt failed (the sequence is idle); the next is for [`RETRY_PAUSE`] later.
     Failed(Failure),
 }
 
@@ -58,7 +58,6 @@ enum Stage {
     Idle,
     Banner { deadline: Instant },
     Ack { deadline: Instant },
-    Pause { until: Instant },
     Done,
 }
 
@@ -111,13 +110,12 @@ impl ResetSequence {
     pub fn deadline(&self) -> Option<Instant> {
         match self.stage {
             Stage::Banner { deadline } | Stage::Ack { deadline } => Some(deadline),
-            Stage::Pause { until } => Some(until),
             Stage::Idle | Stage::Done => None,
         }
     }
 
-    /// Notices a time-out or ends the pause.
-    pub fn poll(&mut self, now: Now, port: &mut PortOps) -> Progress {
+    /// Notices a time-out.
+    pub fn poll(&mut self, now: Now) -> Progress {
         match self.stage {
             Stage::Banner { deadline } if now.mono >= deadline => {
                 let f = if self.got == 0 {
@@ -134,10 +132,6 @@ impl ResetSequence {
                     Failure::ShortAck
                 };
                 self.fail(now, f)
-            }
-            Stage::Pause { until } if now.mono >= until => {
-                self.start(now, port);
-                Progress::Busy
             }
             _ => Progress::Busy,
         }
@@ -198,14 +192,12 @@ impl ResetSequence {
                 self.attempts = 0;
                 Progress::Done
             }
-            Stage::Idle | Stage::Pause { .. } | Stage::Done => Progress::Busy,
+            Stage::Idle | Stage::Done => Progress::Busy,
         }
     }
 
-    fn fail(&mut self, now: Now, failure: Failure) -> Progress {
-        self.stage = Stage::Pause {
-            until: now.mono + RETRY_PAUSE,
-        };
+    fn fail(&mut self, _now: Now, failure: Failure) -> Progress {
+        self.stage = Stage::Idle;
         Progress::Failed(failure)
     }
 }

@@ -16,8 +16,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::{Layout, BANNER_LEN, BANNER_PREFIX, LF, MAX_RECORD};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim cerealbox PATH`: a CerealBox with every input.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "cerealbox",
+    about: "BG Systems CerealBox (EEPROM 3.07): 24 buttons, 8 sliders, 8 encoders",
+    baud: 19200,
+    line: "vrpn_CerealBox Cereal0 {PATH} {BAUD} 24 8 8",
+    make: |_| Box::new(CerealSim::new(SimConfig::default())),
+};
 
 /// Records kept in [`CerealSim::log`].
 pub const LOG_CAP: usize = 100_000;

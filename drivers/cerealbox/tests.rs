@@ -11,16 +11,17 @@ use super::config;
 use super::record::{revolutions, Layout};
 use super::reset::RETRY_PAUSE;
 use super::sim::{analog, buttons, encoder, CerealSim, SentRecord, SimConfig};
-use super::{CerealBoxDriver, WATCHDOG};
+use super::{CerealBoxProtocol, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::Lifecycle;
 use crate::serial::SerialDriver;
 use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
 use crate::sim::VirtualLine;
 use crate::{AnalogRemote, ButtonRemote, Connection, DialRemote, Now, SenderFilter, TimeVal};
 
-type Line = VirtualLine<CerealBoxDriver, CerealSim>;
+type Line = VirtualLine<Lifecycle<CerealBoxProtocol>, CerealSim>;
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 
 const START_WALL: TimeVal = TimeVal {
@@ -62,8 +63,8 @@ fn rig(cfg_text: &str, sim: SimConfig, seed: u64) -> Rig {
     set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg = cereal_cfg(cfg_text);
     let conn = Connection::new_loopback();
-    let driver = CerealBoxDriver::new(&cfg, &conn).unwrap();
-    let layout = driver.layout();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let layout = driver.protocol().layout();
     let a = AnalogRemote::on_connection(&cfg.name, &conn).unwrap();
     let b = ButtonRemote::on_connection(&cfg.name, &conn).unwrap();
     let d = DialRemote::on_connection(&cfg.name, &conn).unwrap();
@@ -113,7 +114,7 @@ impl Rig {
     fn run_to_first_record(&mut self, max: Duration) -> Duration {
         let t0 = self.line.now().mono;
         assert!(
-            self.line.run_until(max, |l| l.driver.records() > 0),
+            self.line.run_until(max, |l| l.driver.stats().records > 0),
             "no record within {max:?}; texts: {:?}",
             self.texts.borrow()
         );
@@ -138,9 +139,19 @@ impl Rig {
 
     /// What a client must see for the complete records of `log` less `lost`, from zeroes.
     fn expected(&self, log: &[SentRecord], lost: &[u64]) -> Vec<Event> {
+        self.expected_from(log, lost, vec![0.0; self.layout.analogs], 0)
+    }
+
+    /// What a client must see for the complete records of `log` less `lost`, from the channels
+    /// `chans` and the buttons `mask`.
+    fn expected_from(
+        &self,
+        log: &[SentRecord],
+        lost: &[u64],
+        mut chans: Vec<f64>,
+        mut mask: u32,
+    ) -> Vec<Event> {
         let l = self.layout;
-        let mut chans = vec![0.0; l.analogs];
-        let mut mask = 0u32;
         let mut out = Vec::new();
         let half = SimConfig::default().second_half_after;
         let now = self.line.now().mono;
@@ -213,7 +224,7 @@ fn every_input_exact_and_stamped_with_the_first_byte() {
     let written: Vec<u8> = r.line.written.iter().flat_map(|w| w.1.clone()).collect();
     assert_eq!(&written[..13], b"Tc0\xa0!!0000\npE");
     assert_eq!(r.line.device.layout(), Some(r.layout));
-    assert_eq!(r.line.driver.box_type(), Some(b'L'));
+    assert_eq!(r.line.driver.protocol().box_type(), Some(b'L'));
     assert_eq!(
         *r.texts.borrow(),
         [(
@@ -229,8 +240,8 @@ fn every_input_exact_and_stamped_with_the_first_byte() {
     let kinds = |f: fn(&Event) -> bool| r.events.borrow().iter().filter(|e| f(e)).count();
     assert!(kinds(|e| matches!(e, Event::Dial(..))) > 1000);
     assert!(kinds(|e| matches!(e, Event::Button(..))) > 1000);
-    assert_eq!(r.line.driver.repolls(), 0);
-    assert_eq!(r.line.driver.skipped_bytes(), 0);
+    assert_eq!(r.line.driver.protocol().repolls(), 0);
+    assert_eq!(r.line.driver.protocol().skipped_bytes(), 0);
 }
 
 #[test]
@@ -249,7 +260,7 @@ fn partial_layouts_configure_the_box_and_decode() {
         };
         assert_eq!(r.line.device.layout(), Some(want), "{text}");
         r.line.run_for(Duration::from_millis(500));
-        assert!(r.line.driver.records() > 50);
+        assert!(r.line.driver.stats().records > 50);
         assert_same(&r.events.borrow(), &r.expected(&r.log(), &[]));
     }
 }
@@ -287,7 +298,7 @@ fn garbage_costs_only_the_records_it_hits_and_polling_goes_on() {
     assert!(lost.len() >= 8, "{} records hit", lost.len());
     assert_same(&r.events.borrow(), &r.expected(&r.log(), &lost));
     // Each hit record left the box waiting: the request was repeated.
-    assert_eq!(r.line.driver.repolls(), lost.len() as u64);
+    assert_eq!(r.line.driver.protocol().repolls(), lost.len() as u64);
     assert!(r.texts_with("skipped") >= 1 && r.texts_with("skipped") <= 2);
     assert_eq!(r.texts_with("resetting"), 0);
 }
@@ -302,7 +313,7 @@ fn a_lost_request_is_repeated() {
     r.run_to_first_record(Duration::from_secs(1));
     r.line.device.ignore_requests(3);
     r.line.run_for(Duration::from_secs(1));
-    assert_eq!(r.line.driver.repolls(), 3);
+    assert_eq!(r.line.driver.protocol().repolls(), 3);
     assert_same(&r.events.borrow(), &r.expected(&r.log(), &[]));
     assert!(r.texts.borrow().len() == 1, "{:?}", r.texts.borrow());
 }
@@ -330,16 +341,32 @@ fn a_hung_box_is_reset_until_it_answers_and_resumes() {
         "{noticed:?}"
     );
     assert_eq!(r.texts_with("Too long since last report, resetting"), 1);
+    // What the box last sent, as the driver holds it.
+    let (held_chans, held_mask) = {
+        let p = r.line.driver.protocol();
+        let mask = (0..r.layout.buttons)
+            .filter(|&i| p.buttons().button(i).is_pressed())
+            .fold(0u32, |m, i| m | 1 << i);
+        (p.analog().channels().to_vec(), mask)
+    };
+    let seen = r.events.borrow().len();
     r.line.run_for(Duration::from_secs(6));
+    // A reset never invents data: no zeroed channels, no released buttons meanwhile.
+    assert_eq!(
+        r.events.borrow().len(),
+        seen,
+        "events while the box was silent"
+    );
     let failures = r.texts_with("No response from box");
     // One attempt per 2 s time-out and pause.
     assert!((2..=3).contains(&failures), "{:?}", r.texts.borrow());
     r.line.device.set_silent(false);
     let woke = r.line.now().mono;
-    let before = r.line.driver.records();
+    let before = r.line.driver.stats().records;
     assert!(r
         .line
-        .run_until(Duration::from_secs(3), |l| l.driver.records() > before));
+        .run_until(Duration::from_secs(3), |l| l.driver.stats().records
+            > before));
     let took = r.line.now().mono - woke;
     assert!(took <= Duration::from_secs(2) + RETRY_PAUSE + Duration::from_millis(20));
     r.line.run_for(Duration::from_secs(1));
@@ -351,10 +378,13 @@ fn a_hung_box_is_reset_until_it_answers_and_resumes() {
         .filter(|e| e.time() > r.arrival(woke))
         .cloned()
         .collect();
-    let want = r.expected(&log, &[]);
+    // From the values the box last sent, exactly what it sends after the reset.
+    let want = r.expected_from(&log, &[], held_chans, held_mask);
     assert!(want.len() > 100);
     assert_same(&after, &want);
-    assert_eq!(r.line.driver.resets(), 2);
+    // The first reset, the watchdog's, and the attempts that failed.
+    let failed = r.texts_with("No response from box") + r.texts_with("expected characters");
+    assert_eq!(r.line.driver.stats().reset_attempts, 2 + failed as u64);
 }
 
 #[test]
@@ -396,12 +426,13 @@ fn a_closed_port_is_reopened_and_reset() {
     r.line.run_for(Duration::from_millis(100));
     r.line.close();
     assert_eq!(r.line.driver.next_deadline(), None);
-    let n = r.line.driver.records();
+    let n = r.line.driver.stats().records;
     assert!(r
         .line
-        .run_until(Duration::from_secs(2), |l| l.driver.records() > n + 10));
+        .run_until(Duration::from_secs(2), |l| l.driver.stats().records
+            > n + 10));
     assert_eq!(r.line.opens, 2);
-    assert_eq!(r.line.driver.resets(), 2);
+    assert_eq!(r.line.driver.stats().reset_attempts, 2);
     assert_eq!(r.line.device.banners(), 2);
 }
 
@@ -418,7 +449,7 @@ fn every_variant_parses_and_builds() {
         let text = format!("vrpn_CerealBox Cereal0 /dev/ttyUSB0 9600 {b} {a} {e}\n");
         let cfg = cereal_cfg(&text);
         let conn = Connection::new_loopback();
-        let d = CerealBoxDriver::new(&cfg, &conn).unwrap();
+        let d = CerealBoxProtocol::new(&cfg, &conn).unwrap();
         assert_eq!(d.analog().num_channels(), a);
         assert_eq!(d.buttons().num_buttons(), b);
         assert_eq!(d.dials().num_dials(), e);
@@ -441,5 +472,5 @@ fn every_variant_parses_and_builds() {
         analogs: 0,
         encoders: 0,
     };
-    assert!(CerealBoxDriver::new(&over, &Connection::new_loopback()).is_err());
+    assert!(CerealBoxProtocol::new(&over, &Connection::new_loopback()).is_err());
 }

@@ -23,8 +23,17 @@ use std::time::{Duration, Instant};
 
 use super::record::{encode, RECORD_LEN};
 use super::reset::STATUS_REQUEST;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim dyna PATH`: a DynaSight streaming 60 records a second.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "dyna",
+    about: "Origin Instruments DynaSight: 60 records/s of known positions",
+    baud: 19200,
+    line: "vrpn_Tracker_Dyna Dyna0 1 {PATH} {BAUD}",
+    make: |baud| Box::new(DynaSim::new(SimConfig::new(baud))),
+};
 
 /// How the status request is answered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -400,3 +400,47 @@ fn every_config_variant_builds_and_bad_lines_are_named() {
         );
     }
 }
+
+#[test]
+fn a_reset_never_invents_data() {
+    let mut r = rig(LINE, |_| {}, 12);
+    r.line.split_reads = true;
+    r.run_to_streaming();
+    r.line.run_for(Duration::from_millis(300));
+    let before = r.poses.borrow().len();
+    r.line.device.mute = true;
+    // The watchdog, a reopen and failed resets: nothing reported meanwhile.
+    r.line.run_for(WATCHDOG + STATUS_LIMIT * 2);
+    assert!(r.texts_with("Tracker failed, trying to reset") >= 1);
+    assert!(r.line.driver.stats().reset_attempts >= 3);
+    // At most the record that was on its way when the device went quiet.
+    assert!(r.poses.borrow().len() <= before + 1);
+    r.line.device.mute = false;
+    r.line.device.clear_log();
+    r.poses.borrow_mut().clear();
+    r.run_to_first_pose(Duration::from_secs(5));
+    r.line.run_for(Duration::from_millis(500));
+    // After the reset, the device's first record decides: the poses are exactly the records
+    // it streamed since (its first record after waking answered the status request).
+    let sent: Vec<[f64; 3]> = r
+        .line
+        .device
+        .sent()
+        .iter()
+        .map(|s| s.sample.expected_position_m())
+        .collect();
+    let got: Vec<[f64; 3]> = r
+        .poses
+        .borrow()
+        .iter()
+        .map(|p| [p.pos.x, p.pos.y, p.pos.z])
+        .collect();
+    assert!(got.len() >= 25);
+    let runs = crate::sim::rig::runs_in(&got, &sent, 0);
+    assert_eq!(
+        runs.first(),
+        Some(&1),
+        "the poses are the records after the status answer"
+    );
+    assert!(sent.len() - got.len() <= 2, "no record lost");
+}

@@ -2,14 +2,15 @@
 //! over `\\` (reset command) and `/` (station device) lines, with their wands and styluses;
 //! what they serve and how they are built.
 
-use super::FastrakDriver;
+use super::FastrakProtocol;
 use crate::config::fields::{baud, block_need, device_name, f64_field, need, uint_in};
 use crate::config::lines::{c_tokens, is_c_space};
 use crate::config::{ConfigError, ConfigErrorKind, ConfigLine, Ctx};
 use crate::devices::ServerDevice;
 use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
-use crate::driver::serve_port;
+use crate::driver::{serve, Lifecycle};
 use crate::error::Error;
+use crate::Connection;
 
 /// Longest combined reset-command string, in bytes.
 pub const MAX_RESET_COMMANDS: usize = 2048;
@@ -389,6 +390,18 @@ fn served_with_stations<'a>(name: &'a str, stations: &'a [StationDevice]) -> Vec
     served
 }
 
+impl Fastrak {
+    /// The driver for this entry, with its tracker and station devices served on `conn`,
+    /// ready for a port.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<FastrakProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.name,
+            FastrakProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
 impl DeviceSpec for Fastrak {
     fn name(&self) -> &str {
         &self.name
@@ -399,8 +412,8 @@ impl DeviceSpec for Fastrak {
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
-        let driver = FastrakDriver::new(self, cx.conn())?;
-        Ok(vec![serve_port(&self.port, driver, cx)])
+        let protocol = FastrakProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.name, &self.port, protocol, cx)])
     }
 }
 

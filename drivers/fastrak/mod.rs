@@ -1,5 +1,7 @@
 //! Polhemus Fastrak, and InterSense IS-600 / IS-900 trackers in their Fastrak-compatible
-//! serial mode: a sans-IO [`SerialDriver`] and a device simulator (`sim`, with the `sim` feature).
+//! serial mode: the `vrpn.cfg` lines ([`config`]), the [`Protocol`] run by the shared
+//! [`Lifecycle`](crate::driver::Lifecycle), and a device simulator (`sim`, with the `sim`
+//! feature).
 //!
 //! # Configuration lines served
 //!
@@ -23,7 +25,7 @@
 //! buttons to the Fastrak stylus format. `IS900time` makes an IS-900 stamp its records with
 //! its own clock, zeroed at reset.
 //!
-//! [`FastrakDriver::from_intersense`] runs a `vrpn_Tracker_InterSense` entry (which C++ serves
+//! [`FastrakProtocol::from_intersense`] runs a `vrpn_Tracker_InterSense` entry (which C++ serves
 //! through InterSense's SDK) over the same Fastrak-compatible protocol, on a serial port and
 //! baud rate the caller supplies.
 //!
@@ -42,10 +44,15 @@
 //! # Supervision
 //!
 //! The reset sequence ([`reset`]) is a state machine over deadlines. Once streaming, a gap of
-//! more than [`WATCHDOG`] since the first byte of the last good record (or the end of the
-//! reset) sends two error texts, closes and reopens the port and resets again; consecutive
-//! failed attempts escalate as described in [`reset`]. Garbage is skipped byte by byte
-//! ([`framing`]) without losing the records after it.
+//! more than 2 s since the first byte of the last good record (or the end of the reset:
+//! [`Supervision::TRACKER`]) sends two error texts, closes and reopens the port and resets
+//! again; consecutive failed attempts escalate as described in [`reset`]. Garbage is skipped
+//! byte by byte ([`framing`]) without losing the records after it.
+//!
+//! With IS-900 timestamps, a record whose device time is not a finite number of milliseconds
+//! between 0 and [`MAX_DEVICE_MS`] (line noise that passed the record checks, a tracker
+//! sending ±∞, NaN or ±3.4·10³⁸) is stamped with the arrival of its first byte instead, and
+//! counted ([`FastrakProtocol::bad_times`]); a warning text says so at most once a second.
 
 pub mod config;
 pub mod framing;
@@ -58,7 +65,7 @@ pub mod stations;
 #[cfg(test)]
 mod tests;
 
-use std::fmt::{self, Write as _};
+use std::fmt;
 use std::time::{Duration, Instant};
 
 use self::framing::{Framed, Framer, Reject};
@@ -67,7 +74,11 @@ use self::reset::{Extra, Progress, ResetPlan, ResetSequence, Say};
 use self::stations::StationServers;
 use crate::devices::text::TextSeverity;
 use crate::driver::registry::{Driver, Hint};
-use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
+use crate::driver::text::Shown;
+use crate::driver::{Cx, Protocol, Reset, Supervision, Texts};
+use crate::serial::{PortKind, PortSettings};
+use crate::time::TimeVal;
+use crate::{Connection, Error, TrackerServer};
 
 use self::config::{Fastrak, InterSense, ResetStep, StationDevice};
 
@@ -88,11 +99,13 @@ pub static DRIVER: Driver = Driver {
                BAUD IS900time (or vrpn_Tracker_InterSense)",
     }],
 };
-use crate::time::{Now, TimeVal};
-use crate::{Connection, Error, TrackerServer};
 
-/// Longest gap between good records before the tracker is declared failed and reset (as C++).
-pub const WATCHDOG: Duration = Duration::from_secs(2);
+/// The largest IS-900 device time taken for a time (2^33 ms, about 99 days after the reset
+/// zeroed the tracker's clock); beyond it, or not finite, a record is stamped with its arrival.
+pub const MAX_DEVICE_MS: f32 = 8_589_934_592.0;
+
+/// At most one warning about unusable device times per this interval.
+const BAD_TIME_NOTE_INTERVAL: Duration = Duration::from_secs(1);
 
 /// Position filter command VRPN's server always sends.
 const POSITION_FILTER: &[u8] = b"x0.2,0.2,0.8,0.8\r";
@@ -101,20 +114,9 @@ const ORIENTATION_FILTER: &[u8] = b"v0.2,0.2,0.8,0.8\r";
 /// Selects the genuine Fastrak stylus button format.
 const STYLUS_FORMAT: &[u8] = b"e1,0\r";
 
-/// Where the driver is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
-    /// The port is closed (or being reopened).
-    Closed,
-    /// The reset sequence runs.
-    Resetting,
-    /// Records are streaming.
-    Streaming,
-}
-
-/// A Fastrak (or IS-600 / IS-900 in Fastrak mode) on one serial port.
-pub struct FastrakDriver {
-    name: String,
+/// The protocol of a Fastrak (or IS-600 / IS-900 in Fastrak mode). See the module
+/// documentation.
+pub struct FastrakProtocol {
     port: String,
     baud: u32,
     tracker: TrackerServer,
@@ -123,19 +125,17 @@ pub struct FastrakDriver {
     formats: Vec<StationFormat>,
     framer: Framer,
     reset: ResetSequence,
-    mode: Mode,
     is900_time: bool,
     clock_zero: Option<TimeVal>,
-    /// First byte of the last good record, or the end of the reset: the watchdog's start.
-    last_record: Option<Now>,
-    records: u64,
+    bad_times: u64,
+    last_bad_time_note: Option<Instant>,
 }
 
-impl FastrakDriver {
-    /// The driver for a `vrpn_Tracker_Fastrak` entry, with its tracker (four sensors) and
+impl FastrakProtocol {
+    /// The protocol of a `vrpn_Tracker_Fastrak` entry, with its tracker (four sensors) and
     /// station devices served on `conn`.
-    pub fn new(cfg: &Fastrak, conn: &Connection) -> Result<FastrakDriver, Error> {
-        FastrakDriver::build(
+    pub fn new(cfg: &Fastrak, conn: &Connection) -> Result<FastrakProtocol, Error> {
+        FastrakProtocol::build(
             Setup {
                 name: &cfg.name,
                 port: &cfg.port,
@@ -149,7 +149,7 @@ impl FastrakDriver {
         )
     }
 
-    /// The driver for a `vrpn_Tracker_InterSense` entry, run over the Fastrak-compatible
+    /// The protocol of a `vrpn_Tracker_InterSense` entry, run over the Fastrak-compatible
     /// serial protocol (not InterSense's SDK) on `port` at `baud`, which the entry's
     /// `COMn`/`AUTO` does not give. The tracker has eight sensors; `ResetAtStartup` changes
     /// nothing, because the port is always reset when it opens.
@@ -158,8 +158,8 @@ impl FastrakDriver {
         port: &str,
         baud: u32,
         conn: &Connection,
-    ) -> Result<FastrakDriver, Error> {
-        FastrakDriver::build(
+    ) -> Result<FastrakProtocol, Error> {
+        FastrakProtocol::build(
             Setup {
                 name: &cfg.name,
                 port,
@@ -173,7 +173,7 @@ impl FastrakDriver {
         )
     }
 
-    fn build(s: Setup<'_>, conn: &Connection) -> Result<FastrakDriver, Error> {
+    fn build(s: Setup<'_>, conn: &Connection) -> Result<FastrakProtocol, Error> {
         debug_assert!(s.stations <= MAX_STATIONS);
         if s.devices.iter().any(|d| d.sensor() as usize >= s.stations) {
             return Err(Error::Unsupported(
@@ -222,8 +222,7 @@ impl FastrakDriver {
                 }
             })
             .collect();
-        Ok(FastrakDriver {
-            name: s.name.to_owned(),
+        Ok(FastrakProtocol {
             port: s.port.to_owned(),
             baud: s.baud,
             tracker,
@@ -236,11 +235,10 @@ impl FastrakDriver {
                 is900_time: s.is900_time,
                 baud: s.baud,
             }),
-            mode: Mode::Closed,
             is900_time: s.is900_time,
             clock_zero: None,
-            last_record: None,
-            records: 0,
+            bad_times: 0,
+            last_bad_time_note: None,
         })
     }
 
@@ -264,11 +262,6 @@ impl FastrakDriver {
         self.stations.get(sensor).and_then(Option::as_ref)
     }
 
-    /// True once the reset finished and records are expected.
-    pub fn is_streaming(&self) -> bool {
-        self.mode == Mode::Streaming
-    }
-
     /// Consecutive reset attempts so far (0 after the tracker answered a status request).
     pub fn reset_attempts(&self) -> u32 {
         self.reset.attempts()
@@ -279,9 +272,9 @@ impl FastrakDriver {
         self.clock_zero
     }
 
-    /// Good records reported since construction.
-    pub fn records(&self) -> u64 {
-        self.records
+    /// Records whose IS-900 device time was not a time (stamped with their arrival instead).
+    pub fn bad_times(&self) -> u64 {
+        self.bad_times
     }
 
     /// Bytes skipped while resynchronising, since construction.
@@ -289,63 +282,84 @@ impl FastrakDriver {
         self.framer.total_skipped()
     }
 
-    fn progress(&mut self, p: Progress, now: Now) {
-        if let Progress::Done { clock_zero } = p {
-            self.mode = Mode::Streaming;
-            self.clock_zero = clock_zero;
-            self.last_record = Some(now);
-            self.framer.clear();
-            say(
-                &self.tracker,
-                TextSeverity::Warning,
-                format_args!("Reset Completed (this is good)"),
-            );
+    fn progress(&mut self, p: Progress, cx: &mut Cx<'_>) -> Reset {
+        match p {
+            Progress::Busy => Reset::Working,
+            Progress::Done { clock_zero } => {
+                self.clock_zero = clock_zero;
+                self.framer.clear();
+                cx.say(
+                    TextSeverity::Warning,
+                    format_args!("Reset Completed (this is good)"),
+                );
+                Reset::Done
+            }
         }
     }
 
-    fn report(&mut self, framed: Framed) {
+    /// The record's time: with IS-900 timestamps, the tracker's clock zero plus its device
+    /// time, if that is a time; else the arrival of its first byte.
+    fn record_time(&mut self, framed: &Framed, cx: &mut Cx<'_>) -> TimeVal {
+        let (Some(zero), Some(ms)) = (
+            self.clock_zero.filter(|_| self.is900_time),
+            framed.record.time_ms,
+        ) else {
+            return framed.first_byte.wall;
+        };
+        if ms.is_finite() && (0.0..=MAX_DEVICE_MS).contains(&ms) {
+            return TimeVal::from_micros(zero.as_micros() + is900_offset(ms).as_micros());
+        }
+        self.bad_times += 1;
+        let now = framed.first_byte.mono;
+        if self
+            .last_bad_time_note
+            .map_or(true, |t| now >= t + BAD_TIME_NOTE_INTERVAL)
+        {
+            self.last_bad_time_note = Some(now);
+            cx.say(
+                TextSeverity::Warning,
+                format_args!(
+                    "IS-900 timestamp {ms} ms is not a time since the reset; {} such record(s) \
+                     stamped with their arrival instead",
+                    self.bad_times
+                ),
+            );
+        }
+        framed.first_byte.wall
+    }
+
+    fn report(&mut self, framed: Framed, cx: &mut Cx<'_>) {
         if let Some(r) = framed.resync {
             let n = r.skipped;
             let sev = TextSeverity::Normal;
-            let t = &self.tracker;
             match r.reason {
-                Reject::NotRecordStart(b) => say(
-                    t,
+                Reject::NotRecordStart(b) => cx.say(
                     sev,
                     format_args!(
                         "While syncing (looking for '0', got {}), skipped {n} bytes",
                         Shown(b)
                     ),
                 ),
-                Reject::BadStation(b) => say(
-                    t,
+                Reject::BadStation(b) => cx.say(
                     sev,
                     format_args!(
                         "Bad sensor # ({}) in record, re-synced after {n} bytes",
                         i32::from(b) - i32::from(b'1')
                     ),
                 ),
-                Reject::BadStatus(_) => say(
-                    t,
+                Reject::BadStatus(_) => cx.say(
                     sev,
                     format_args!("Bad 3rd char in record, re-synced after {n} bytes"),
                 ),
-                Reject::NoClosingSpace(_) => say(
-                    t,
+                Reject::NoClosingSpace(_) => cx.say(
                     sev,
                     format_args!("No space character at end of report, re-synced after {n} bytes"),
                 ),
             }
         }
+        let time = self.record_time(&framed, cx);
+        cx.record(framed.first_byte);
         let rec = framed.record;
-        let time = match (self.is900_time, self.clock_zero, rec.time_ms) {
-            (true, Some(zero), Some(ms)) => {
-                TimeVal::from_micros(zero.as_micros() + is900_offset(ms).as_micros())
-            }
-            _ => framed.first_byte.wall,
-        };
-        self.last_record = Some(framed.first_byte);
-        self.records += 1;
         let index = usize::from(rec.station - 1);
         if let Some(device) = self.stations[index].as_mut() {
             device.report(&rec, self.formats[index].buttons, time);
@@ -358,38 +372,9 @@ impl FastrakDriver {
             rec.quat_xyzw(),
         );
     }
-
-    fn watchdog(&mut self, now: Now, port: &mut PortOps) {
-        let Some(last) = self.last_record else {
-            return;
-        };
-        if now.mono < last.mono + WATCHDOG {
-            return;
-        }
-        let (cur, ts) = (now.wall, last.wall);
-        say(
-            &self.tracker,
-            TextSeverity::Error,
-            format_args!(
-                "Tracker failed to read... current_time={}:{}, timestamp={}:{}",
-                cur.sec, cur.usec, ts.sec, ts.usec
-            ),
-        );
-        say(
-            &self.tracker,
-            TextSeverity::Error,
-            format_args!(
-                "Tracker failed, trying to reset (Try power cycle if more than 4 attempts made)"
-            ),
-        );
-        self.mode = Mode::Closed;
-        self.last_record = None;
-        self.framer.clear();
-        port.reopen();
-    }
 }
 
-/// The parts of an entry the driver needs.
+/// The parts of an entry the protocol needs.
 struct Setup<'a> {
     name: &'a str,
     port: &'a str,
@@ -400,131 +385,63 @@ struct Setup<'a> {
     stations: usize,
 }
 
-impl SerialDriver for FastrakDriver {
-    fn name(&self) -> &str {
-        &self.name
-    }
+impl Protocol for FastrakProtocol {
+    const KIND: &'static str = "Fastrak";
 
     fn port_kind(&self) -> PortKind {
         PortKind::Serial(PortSettings::n81(self.baud))
     }
 
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
+    fn supervision(&self) -> Supervision {
+        Supervision::TRACKER
+    }
+
+    fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
         self.framer.clear();
-        self.last_record = None;
-        self.mode = Mode::Resetting;
-        let p = self.reset.start(now, port, &mut TrackerSay(&self.tracker));
-        self.progress(p, now);
+        let now = cx.now;
+        let (port, texts) = cx.port_and_texts();
+        let p = self.reset.start(now, port, &mut TextsSay(texts));
+        self.progress(p, cx)
     }
 
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let p = self
-                    .reset
-                    .received(bytes, arrived, port, &mut TrackerSay(&self.tracker));
-                self.progress(p, arrived);
-            }
-            Mode::Streaming => {
-                for &b in bytes {
-                    self.framer.push(b, arrived);
-                    while let Some(framed) = self.framer.next_record() {
-                        self.report(framed);
-                    }
-                }
+    fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
+        let now = cx.now;
+        let (port, texts) = cx.port_and_texts();
+        let p = self.reset.received(bytes, now, port, &mut TextsSay(texts));
+        self.progress(p, cx)
+    }
+
+    fn reset_poll(&mut self, cx: &mut Cx<'_>) -> Reset {
+        let now = cx.now;
+        let (port, texts) = cx.port_and_texts();
+        let p = self.reset.poll(now, port, &mut TextsSay(texts));
+        self.progress(p, cx)
+    }
+
+    fn reset_deadline(&self) -> Option<Instant> {
+        self.reset.deadline()
+    }
+
+    fn received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        for &b in bytes {
+            self.framer.push(b, cx.now);
+            while let Some(framed) = self.framer.next_record() {
+                self.report(framed, cx);
             }
         }
     }
 
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let p = self.reset.poll(now, port, &mut TrackerSay(&self.tracker));
-                self.progress(p, now);
-            }
-            Mode::Streaming => self.watchdog(now, port),
-        }
-    }
-
-    fn next_deadline(&self) -> Option<Instant> {
-        match self.mode {
-            Mode::Closed => None,
-            Mode::Resetting => self.reset.deadline(),
-            Mode::Streaming => self.last_record.map(|t| t.mono + WATCHDOG),
-        }
-    }
-
-    fn closed(&mut self, _now: Now) {
-        self.mode = Mode::Closed;
+    fn stopped(&mut self) {
         self.reset.stop();
         self.framer.clear();
-        self.last_record = None;
     }
 }
 
-/// Sends texts from the tracker's sender.
-struct TrackerSay<'a>(&'a TrackerServer);
+/// The reset's texts, sent from the tracker's name.
+struct TextsSay<'a>(&'a Texts);
 
-impl Say for TrackerSay<'_> {
+impl Say for TextsSay<'_> {
     fn say(&mut self, severity: TextSeverity, args: fmt::Arguments<'_>) {
-        say(self.0, severity, args);
-    }
-}
-
-/// Formats a text message on the stack (no allocation) and sends it from `tracker`.
-fn say(tracker: &TrackerServer, severity: TextSeverity, args: fmt::Arguments<'_>) {
-    let mut text = TextBuf::default();
-    let _ = text.write_fmt(args);
-    // A failed send is the connection's business (it reports and drops the peer).
-    let _ = tracker.send_text(severity, 0, text.as_str());
-}
-
-/// A byte as C++ prints it in messages: the character if printable, else its hex value.
-struct Shown(u8);
-
-impl fmt::Display for Shown {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0.is_ascii_graphic() || self.0 == b' ' {
-            write!(f, "'{}'", self.0 as char)
-        } else {
-            write!(f, "0x{:02X}", self.0)
-        }
-    }
-}
-
-/// A fixed buffer for one text message; longer text is cut at a character boundary.
-struct TextBuf {
-    buf: [u8; 256],
-    len: usize,
-}
-
-impl Default for TextBuf {
-    fn default() -> TextBuf {
-        TextBuf {
-            buf: [0; 256],
-            len: 0,
-        }
-    }
-}
-
-impl TextBuf {
-    fn as_str(&self) -> &str {
-        // Only whole characters are ever copied in.
-        std::str::from_utf8(&self.buf[..self.len]).unwrap_or("")
-    }
-}
-
-impl fmt::Write for TextBuf {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let room = self.buf.len() - self.len;
-        let mut n = s.len().min(room);
-        while !s.is_char_boundary(n) {
-            n -= 1;
-        }
-        self.buf[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
-        self.len += n;
-        Ok(())
+        self.0.say(severity, args);
     }
 }

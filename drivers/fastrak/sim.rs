@@ -23,8 +23,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::MAX_STATIONS;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim fastrak PATH`: a Fastrak with four stations.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "fastrak",
+    about: "Polhemus Fastrak (or IS-900 in Fastrak mode): 4 stations of known poses",
+    baud: 19200,
+    line: "vrpn_Tracker_Fastrak Tracker0 {PATH} {BAUD}",
+    make: |baud| Box::new(FastrakSim::new(SimConfig::new(baud))),
+};
 
 /// Ctrl-Y: reinitialise.
 const CTRL_Y: u8 = 0x19;
@@ -182,6 +191,9 @@ pub struct FastrakSim {
     pub commands: Vec<String>,
     /// Every record sent (the last [`LOG_CAP`]).
     pub log: VecDeque<SentRecord>,
+    /// Device times sent instead of the clock's, one per record, in order (for tests of
+    /// IS-900 timestamps that are not times: ±∞, NaN, ±3.4·10³⁸).
+    pub hostile_times: VecDeque<f32>,
 }
 
 impl FastrakSim {
@@ -213,6 +225,7 @@ impl FastrakSim {
             reboots: 0,
             commands: Vec::new(),
             log: VecDeque::new(),
+            hostile_times: VecDeque::new(),
         }
     }
 
@@ -378,7 +391,14 @@ impl FastrakSim {
             let i = usize::from(station - 1);
             let seq = self.seq[i];
             self.seq[i] += 1;
-            let device_ms = self.device_ms(at);
+            let device_ms = match self.hostile_times.front() {
+                Some(_)
+                    if self.binary && self.lists[i].items[..self.lists[i].len].contains(&21) =>
+                {
+                    self.hostile_times.pop_front().unwrap_or_default()
+                }
+                _ => self.device_ms(at),
+            };
             rec.clear();
             rec.extend_from_slice(&[b'0', b'0' + station, self.cfg.status_byte]);
             let list = self.lists[i];

@@ -1,12 +1,13 @@
 //! The `vrpn_Tracker_Flock` and `vrpn_Tracker_Flock_Parallel` lines: their fields, their
 //! parsers, what they serve and how they are built.
 
-use super::{FlockDriver, FlockParallelPort};
+use super::{FlockParallelPort, FlockProtocol};
 use crate::config::{ConfigError, ConfigErrorKind, ConfigLine};
 use crate::devices::ServerDevice;
 use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
-use crate::driver::serve_port;
+use crate::driver::{serve, serve_port, Lifecycle};
 use crate::error::Error;
+use crate::Connection;
 
 /// Most receivers on an Ascension Flock of Birds.
 pub const MAX_FLOCK_SENSORS: u32 = 13;
@@ -141,6 +142,17 @@ pub(super) fn parse_parallel(
     }))
 }
 
+impl Flock {
+    /// The driver for this entry, with its tracker served on `conn`, ready for a port.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<FlockProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.name,
+            FlockProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
 impl DeviceSpec for Flock {
     fn name(&self) -> &str {
         &self.name
@@ -151,8 +163,8 @@ impl DeviceSpec for Flock {
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
-        let driver = FlockDriver::new(self, cx.conn())?;
-        Ok(vec![serve_port(&self.port, driver, cx)])
+        let protocol = FlockProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.name, &self.port, protocol, cx)])
     }
 }
 

@@ -1,6 +1,7 @@
 //! Ascension Flock of Birds: every receiver on the master bird's serial line
-//! ([`FlockDriver`]), or one serial line per receiver ([`parallel`]); sans-IO drivers and a
-//! device simulator (`sim`, with the `sim` feature).
+//! ([`FlockProtocol`], run by the shared [`Lifecycle`](crate::driver::Lifecycle)), or one
+//! serial line per receiver ([`parallel`]: a group of drivers sharing the Flock's state); the
+//! `vrpn.cfg` lines ([`config`]) and a device simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration lines served
 //!
@@ -32,8 +33,8 @@
 //! in stream mode. Records are found byte by byte ([`framer`]): garbage costs at most the
 //! record it hits, never a later one. More than [`WATCHDOG`] without a record (or after the
 //! reset) sends an error text, and the port is reopened and the Flock reset. A failed reset
-//! does the same; after [`FAILURES_BEFORE_PAUSE`] failed attempts in a row the driver sends
-//! advice and waits [`RETRY_PAUSE`] before the next.
+//! does the same; after [`FAILURES_BEFORE_PAUSE`] failed attempts in a row (a record sets the
+//! count back to 0) the lifecycle sends advice and waits [`RETRY_PAUSE`] before the next.
 //!
 //! # Differences from C++ VRPN
 //!
@@ -67,7 +68,8 @@ use self::record::{invert_xyzw, sensor_for_address, PosQuat, Transmitter, GROUP_
 use self::reset::{Outcome, Progress, ResetPlan, ResetSequence};
 use crate::devices::text::TextSeverity;
 use crate::driver::registry::Driver;
-use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
+use crate::driver::{Cx, Pause, Protocol, Reset, Retry, Supervision};
+use crate::serial::{PortKind, PortSettings};
 use crate::time::Now;
 use crate::{Connection, Error, TrackerServer};
 
@@ -106,20 +108,8 @@ const ADVICE: &str = "Flock keeps failing: check that every cable is attached, e
                       switched to FLY and no receiver lies too close to the transmitter, then \
                       power cycle the Flock. Next attempt in 15 seconds";
 
-/// Where a driver is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
-    /// The port is closed, or being reopened.
-    Closed,
-    /// The reset sequence runs.
-    Resetting,
-    /// Records are streaming.
-    Streaming,
-    /// Waiting after repeated failures before reopening.
-    Pausing { until: Instant },
-}
-
-/// Counts skipped bytes and reports them at most once per [`RESYNC_NOTE_INTERVAL`].
+/// Counts skipped bytes and reports them at most once per [`RESYNC_NOTE_INTERVAL`] (the
+/// parallel form's lines share one count).
 #[derive(Clone, Debug, Default)]
 struct SkipNotes {
     total: u64,
@@ -152,9 +142,8 @@ impl SkipNotes {
 }
 
 /// An Ascension Flock of Birds with every receiver on the master bird's serial line (group
-/// mode, stream mode).
-pub struct FlockDriver {
-    name: String,
+/// mode, stream mode): the protocol run by the shared [`Lifecycle`](crate::driver::Lifecycle).
+pub struct FlockProtocol {
     port: String,
     baud: u32,
     receivers: u8,
@@ -163,27 +152,20 @@ pub struct FlockDriver {
     tracker: TrackerServer,
     reset: ResetSequence,
     framer: Framer,
-    mode: Mode,
-    /// First byte of the last record, or the end of the reset: the watchdog's start.
-    last_record: Option<Now>,
-    failures: u32,
-    records: u64,
-    skips: SkipNotes,
     rate: Option<(u8, f64)>,
 }
 
-impl FlockDriver {
-    /// The driver for a `vrpn_Tracker_Flock` entry, with its tracker (one sensor per
+impl FlockProtocol {
+    /// The protocol of a `vrpn_Tracker_Flock` entry, with its tracker (one sensor per
     /// receiver) served on `conn`.
-    pub fn new(cfg: &Flock, conn: &Connection) -> Result<FlockDriver, Error> {
+    pub fn new(cfg: &Flock, conn: &Connection) -> Result<FlockProtocol, Error> {
         let receivers = u8::try_from(cfg.sensors)
             .ok()
             .filter(|n| (1..=config::MAX_FLOCK_SENSORS as u8).contains(n))
             .ok_or(Error::Unsupported("a Flock has 1 to 13 receivers"))?;
         let transmitter = Transmitter::from_ert(cfg.use_ert);
         let tracker = TrackerServer::new(&cfg.name, conn, usize::from(receivers))?;
-        Ok(FlockDriver {
-            name: cfg.name.clone(),
+        Ok(FlockProtocol {
             port: cfg.port.clone(),
             baud: cfg.baud,
             receivers,
@@ -197,11 +179,6 @@ impl FlockDriver {
                 stream: true,
             }),
             framer: Framer::new(GROUP_RECORD_LEN),
-            mode: Mode::Closed,
-            last_record: None,
-            failures: 0,
-            records: 0,
-            skips: SkipNotes::default(),
             rate: None,
         })
     }
@@ -221,55 +198,35 @@ impl FlockDriver {
         self.reset.plan()
     }
 
-    /// True once the reset finished and records are expected.
-    pub fn is_streaming(&self) -> bool {
-        self.mode == Mode::Streaming
-    }
-
-    /// Records reported since construction.
-    pub fn records(&self) -> u64 {
-        self.records
-    }
-
-    /// Bytes skipped while looking for records, since construction.
-    pub fn skipped_bytes(&self) -> u64 {
-        self.skips.total
-    }
-
-    /// Failed attempts since the last record (reset failures and watchdog time-outs).
-    pub fn failures(&self) -> u32 {
-        self.failures
-    }
-
     /// The crystal speed (MHz) and measurement rate (Hz) the last reset read, if it could.
     pub fn measurement_rate(&self) -> Option<(u8, f64)> {
         self.rate
     }
 
-    fn progress(&mut self, p: Progress, now: Now, port: &mut PortOps) {
+    fn progress(&mut self, p: Progress, cx: &mut Cx<'_>) -> Reset {
         match p {
-            Progress::Working => {}
-            Progress::Done(outcome) => self.reset_done(outcome, now),
+            Progress::Working => Reset::Working,
+            Progress::Done(outcome) => {
+                self.reset_done(outcome, cx);
+                Reset::Done
+            }
             Progress::Failed(failure) => {
                 let units = self.reset.plan().units();
-                say(
-                    &self.tracker,
+                cx.say(
                     TextSeverity::Error,
                     format_args!("{}", FailureText { failure, units }),
                 );
-                self.fail(now, port);
+                cx.say(TextSeverity::Error, format_args!("{TRYING_TO_RESET}"));
+                Reset::Failed(Retry::Reopen)
             }
         }
     }
 
-    fn reset_done(&mut self, outcome: Outcome, now: Now) {
-        self.mode = Mode::Streaming;
+    fn reset_done(&mut self, outcome: Outcome, cx: &mut Cx<'_>) {
         self.framer.clear();
-        self.last_record = Some(now);
         self.rate = outcome.rate;
         match outcome.rate {
-            Some((mhz, hz)) => say(
-                &self.tracker,
+            Some((mhz, hz)) => cx.say(
                 TextSeverity::Normal,
                 format_args!(
                     "Flock reset: {} receivers streaming, measurement rate {hz:.2} Hz \
@@ -277,8 +234,7 @@ impl FlockDriver {
                     self.receivers
                 ),
             ),
-            None => say(
-                &self.tracker,
+            None => cx.say(
                 TextSeverity::Warning,
                 format_args!(
                     "Flock reset: {} receivers streaming; the measurement rate did not arrive",
@@ -288,46 +244,23 @@ impl FlockDriver {
         }
     }
 
-    /// Gives the Flock up: reopen and reset, or pause after too many failures in a row.
-    fn fail(&mut self, now: Now, port: &mut PortOps) {
-        say(
-            &self.tracker,
-            TextSeverity::Error,
-            format_args!("{TRYING_TO_RESET}"),
-        );
-        self.reset.stop();
-        self.framer.clear();
-        self.last_record = None;
-        self.failures += 1;
-        if self.failures % FAILURES_BEFORE_PAUSE == 0 {
-            say(&self.tracker, TextSeverity::Error, format_args!("{ADVICE}"));
-            self.mode = Mode::Pausing {
-                until: now.mono + RETRY_PAUSE,
-            };
-        } else {
-            self.mode = Mode::Closed;
-            port.reopen();
-        }
-    }
-
-    fn record(&mut self, framed: Framed) {
+    fn record(&mut self, framed: Framed, cx: &mut Cx<'_>) {
         let address = framed.bytes[GROUP_RECORD_LEN - 1];
         let Some(sensor) = sensor_for_address(address, self.receivers, self.transmitter) else {
             self.framer.reject(&framed);
             return;
         };
-        if framed.skipped > 0 {
-            self.skips
-                .add(framed.skipped, framed.first_byte.mono, &self.tracker);
-        }
+        cx.skipped(
+            u64::from(framed.skipped),
+            "Flock",
+            format_args!(" (bytes without the phasing bit, or a record cut short)"),
+        );
         let r = PosQuat::decode(&framed.bytes);
         let mut quat = r.quat_xyzw();
         if self.invert {
             quat = invert_xyzw(quat);
         }
-        self.last_record = Some(framed.first_byte);
-        self.records += 1;
-        self.failures = 0;
+        cx.record(framed.first_byte);
         // A failed send is the connection's business (it reports and drops the peer).
         let _ = self.tracker.report_pose(
             sensor,
@@ -336,91 +269,72 @@ impl FlockDriver {
             quat,
         );
     }
+}
 
-    fn watchdog(&mut self, now: Now, port: &mut PortOps) {
-        let Some(last) = self.last_record else {
-            return;
-        };
-        if now.mono < last.mono + WATCHDOG {
-            return;
+impl Protocol for FlockProtocol {
+    const KIND: &'static str = "Flock";
+
+    fn port_kind(&self) -> PortKind {
+        PortKind::Serial(PortSettings::n81(self.baud))
+    }
+
+    /// C++'s watchdog (2 s, reopen and reset), and a pause with advice after every fourth
+    /// failure in a row, so that a dead Flock is not hammered with resets.
+    fn supervision(&self) -> Supervision {
+        Supervision {
+            pause: Some(Pause {
+                every: FAILURES_BEFORE_PAUSE,
+                wait: RETRY_PAUSE,
+                advice: ADVICE,
+            }),
+            ..Supervision::TRACKER
         }
-        let (cur, ts) = (now.wall, last.wall);
-        say(
-            &self.tracker,
+    }
+
+    fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
+        self.framer.clear();
+        self.reset.start(cx.now, cx.port());
+        Reset::Working
+    }
+
+    fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
+        // Bytes after the answer that ends the reset were sent before `'@'`: dropped.
+        let p = self.reset.received(bytes, cx.now, cx.port());
+        self.progress(p, cx)
+    }
+
+    fn reset_poll(&mut self, cx: &mut Cx<'_>) -> Reset {
+        let p = self.reset.poll(cx.now, cx.port());
+        self.progress(p, cx)
+    }
+
+    fn reset_deadline(&self) -> Option<Instant> {
+        self.reset.deadline()
+    }
+
+    fn received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        for &b in bytes {
+            if let Some(framed) = self.framer.push(b, cx.now) {
+                self.record(framed, cx);
+            }
+        }
+    }
+
+    /// C++'s two texts, the second the one every failure sends.
+    fn silent(&mut self, last_record: Now, cx: &mut Cx<'_>) {
+        let (cur, ts) = (cx.now.wall, last_record.wall);
+        cx.say(
             TextSeverity::Error,
             format_args!(
                 "Tracker failed to read... current_time={}:{}, timestamp={}:{}",
                 cur.sec, cur.usec, ts.sec, ts.usec
             ),
         );
-        self.fail(now, port);
-    }
-}
-
-impl SerialDriver for FlockDriver {
-    fn name(&self) -> &str {
-        &self.name
+        cx.say(TextSeverity::Error, format_args!("{TRYING_TO_RESET}"));
     }
 
-    fn port_kind(&self) -> PortKind {
-        PortKind::Serial(PortSettings::n81(self.baud))
-    }
-
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
-        self.framer.clear();
-        self.last_record = None;
-        self.mode = Mode::Resetting;
-        self.reset.start(now, port);
-    }
-
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed | Mode::Pausing { .. } => {}
-            Mode::Resetting => {
-                // Bytes after the answer that ends the reset were sent before `'@'`: dropped.
-                let p = self.reset.received(bytes, arrived, port);
-                self.progress(p, arrived, port);
-            }
-            Mode::Streaming => {
-                for &b in bytes {
-                    if let Some(framed) = self.framer.push(b, arrived) {
-                        self.record(framed);
-                    }
-                }
-            }
-        }
-    }
-
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let p = self.reset.poll(now, port);
-                self.progress(p, now, port);
-            }
-            Mode::Streaming => self.watchdog(now, port),
-            Mode::Pausing { until } => {
-                if now.mono >= until {
-                    self.mode = Mode::Closed;
-                    port.reopen();
-                }
-            }
-        }
-    }
-
-    fn next_deadline(&self) -> Option<Instant> {
-        match self.mode {
-            Mode::Closed => None,
-            Mode::Resetting => self.reset.deadline(),
-            Mode::Streaming => self.last_record.map(|t| t.mono + WATCHDOG),
-            Mode::Pausing { until } => Some(until),
-        }
-    }
-
-    fn closed(&mut self, _now: Now) {
-        self.mode = Mode::Closed;
+    fn stopped(&mut self) {
         self.reset.stop();
         self.framer.clear();
-        self.last_record = None;
     }
 }

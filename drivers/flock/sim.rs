@@ -40,8 +40,22 @@ use super::reset::{
     self, AUTOCONFIG, BIRD_STATUS, CRYSTAL_SPEED, EXPANDED_ERROR, GROUP_MODE, RATE_COUNT,
     STATUS_LEN, SYSTEM_STATUS, UNIT_ACCESSIBLE, UNIT_RECEIVER, UNIT_RUNNING,
 };
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim flock PATH`: a Flock of Birds with two receivers and an extended-range
+/// transmitter on one line (RTS does not reach a device through a pseudo-terminal).
+pub static SIMULATOR: Simulator = Simulator {
+    name: "flock",
+    about: "Ascension Flock of Birds: 2 receivers, extended-range transmitter, one line",
+    baud: 115_200,
+    line: "vrpn_Tracker_Flock Tracker0 2 {PATH} {BAUD} 0",
+    make: |baud| {
+        let mut cfg = SimConfig::new(2, true, baud);
+        cfg.rts_wired = false;
+        Box::new(FlockSim::new(cfg))
+    },
+};
 
 /// Highest bus address.
 const MAX_ADDRESS: usize = 14;

@@ -11,15 +11,16 @@ use super::config;
 use super::record::Transmitter;
 use super::reset::{self, AUTOCONFIG_LIMIT, BOOT_LIMIT};
 use super::sim::{pose, FlockSim, SentRecord, SimConfig};
-use super::{FlockDriver, RETRY_PAUSE, WATCHDOG};
+use super::{FlockProtocol, RETRY_PAUSE, WATCHDOG};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::Lifecycle;
 use crate::serial::{PortKind, PortSettings, SerialDriver};
 use crate::server::config::parse_one;
 use crate::sim::VirtualLine;
 use crate::{Connection, Now, SenderFilter, TimeVal, TrackerPose, TrackerRemote};
 
-type Line = VirtualLine<FlockDriver, FlockSim>;
+type Line = VirtualLine<Lifecycle<FlockProtocol>, FlockSim>;
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 
 const START_WALL: TimeVal = TimeVal {
@@ -66,7 +67,7 @@ fn rig(cfg_text: &str, tweak: impl FnOnce(&mut SimConfig), seed: u64) -> Rig {
     set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg = flock_cfg(cfg_text);
     let conn = Connection::new_loopback();
-    let driver = FlockDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let remote = TrackerRemote::on_connection(&cfg.name, &conn).unwrap();
     let poses: Shared<TrackerPose> = Rc::default();
     let p = poses.clone();
@@ -188,12 +189,12 @@ const FOUR_ERT: &str = "vrpn_Tracker_Flock Tracker0 4 /dev/ttyS0 115200 0\n";
 fn port_settings_and_identity() {
     let r = rig(FOUR_ERT, |_| {}, 1);
     assert_eq!(r.line.driver.name(), "Tracker0");
-    assert_eq!(r.line.driver.port(), "/dev/ttyS0");
+    assert_eq!(r.line.driver.protocol().port(), "/dev/ttyS0");
     assert_eq!(
         r.line.driver.port_kind(),
         PortKind::Serial(PortSettings::n81(115_200))
     );
-    assert_eq!(r.line.driver.tracker().num_sensors(), 4);
+    assert_eq!(r.line.driver.protocol().tracker().num_sensors(), 4);
 }
 
 #[test]
@@ -241,7 +242,7 @@ fn reset_reaches_streaming_and_first_report() {
         assert_eq!(f.hemisphere(a), Some([0x0C, 0x00]));
     }
     drop(f);
-    let (mhz, hz) = r.line.driver.measurement_rate().unwrap();
+    let (mhz, hz) = r.line.driver.protocol().measurement_rate().unwrap();
     assert_eq!(mhz, 25);
     assert!((hz - 100.0).abs() < 0.01, "{hz}");
     assert_eq!(r.texts_with("measurement rate 100.00 Hz"), 1);
@@ -281,8 +282,8 @@ fn values_arrive_exactly_and_in_order() {
         assert_eq!(rec.cycle, sent[0].cycle + (i / 4) as u64);
         assert!(rec.pos_quat);
     }
-    assert_eq!(r.line.driver.skipped_bytes(), 0);
-    assert_eq!(r.line.driver.records(), r.poses.borrow().len() as u64);
+    assert_eq!(r.line.driver.stats().skipped_bytes, 0);
+    assert_eq!(r.line.driver.stats().records, r.poses.borrow().len() as u64);
 }
 
 #[test]
@@ -316,7 +317,9 @@ fn run_to_idle_line(r: &mut Rig) {
     let latency = r.line.latency;
     assert!(r.line.run_until(Duration::from_secs(3), |l| {
         let before = l.now().mono - latency - Duration::from_micros(1);
-        poses.borrow().len() > n && l.device.is_quiet_at(before) && !l.driver.framer.in_record()
+        poses.borrow().len() > n
+            && l.device.is_quiet_at(before)
+            && !l.driver.protocol().framer.in_record()
     }));
 }
 
@@ -342,7 +345,7 @@ fn garbage_between_records_loses_nothing() {
     }
     r.line.run_for(Duration::from_millis(500));
     r.assert_all_arrived();
-    assert_eq!(r.line.driver.skipped_bytes(), skipped);
+    assert_eq!(r.line.driver.stats().skipped_bytes, skipped);
     // Reported, at most once a second.
     assert_eq!(r.texts_with("skipped"), 1, "{:?}", r.texts.borrow());
     assert_eq!(r.texts_with("failed"), 0);
@@ -405,7 +408,7 @@ fn silent_device_is_reset_by_the_watchdog_and_resumes() {
     assert_eq!(r.texts_with("Tracker failed, trying to reset"), 1);
     assert_eq!(r.line.opens, 2);
     assert_eq!(r.line.device.flock().resets(), 2);
-    assert_eq!(r.line.driver.failures(), 0);
+    assert_eq!(r.line.driver.stats().failures_in_a_row, 0);
     // And it keeps streaming.
     r.forget_seen();
     r.line.run_for(Duration::from_secs(1));
@@ -456,7 +459,7 @@ fn stream_left_running_is_stopped_before_the_reset() {
     r.forget_seen();
     r.line.run_for(Duration::from_secs(1));
     r.assert_all_arrived();
-    assert_eq!(r.line.driver.skipped_bytes(), 0);
+    assert_eq!(r.line.driver.stats().skipped_bytes, 0);
 }
 
 #[test]
@@ -498,7 +501,7 @@ fn dead_device_fails_pauses_and_recovers_when_powered() {
         .line
         .run_until(Duration::from_secs(5), |_| !poses.borrow().is_empty()));
     assert_eq!(r.line.opens, 5);
-    assert_eq!(r.line.driver.failures(), 0);
+    assert_eq!(r.line.driver.stats().failures_in_a_row, 0);
 }
 
 #[test]
@@ -665,6 +668,26 @@ fn line_gone_quiet_fails_resets_until_it_returns() {
     assert_eq!(r.texts_with("the master bird does not answer"), 0);
     assert_eq!(r.line.opens, 2);
     r.forget_seen();
+    r.line.run_for(Duration::from_millis(500));
+    r.assert_all_arrived();
+}
+
+#[test]
+fn a_reset_never_invents_data() {
+    let mut r = rig(FOUR_ERT, |_| {}, 42);
+    r.run_to_streaming(Duration::from_secs(5));
+    r.line.run_for(Duration::from_millis(300));
+    r.line.device.stall();
+    // A record already on its way still arrives; then nothing is reported until the
+    // device's first record after the reset, and from that one on exactly its records.
+    r.line.run_for(Duration::from_millis(50));
+    r.line.device.flock_mut().clear_log();
+    r.poses.borrow_mut().clear();
+    let poses = r.poses.clone();
+    assert!(r
+        .line
+        .run_until(Duration::from_secs(10), |_| !poses.borrow().is_empty()));
+    assert_eq!(r.line.opens, 2, "reopened and reset");
     r.line.run_for(Duration::from_millis(500));
     r.assert_all_arrived();
 }

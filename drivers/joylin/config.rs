@@ -1,11 +1,12 @@
 //! The `vrpn_Joylin` line: its fields, its parser, what it serves and how it is built.
 
-use super::JoylinDriver;
+use super::JoylinProtocol;
 use crate::config::{ConfigError, ConfigLine};
 use crate::devices::ServerDevice;
 use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
-use crate::driver::serve_port;
+use crate::driver::{serve, Lifecycle};
 use crate::error::Error;
+use crate::Connection;
 
 /// `vrpn_Joylin NAME DEVICE`: a Linux joystick (`/dev/input/jsN`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -25,6 +26,18 @@ pub(super) fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>
     }))
 }
 
+impl Joylin {
+    /// The driver for this entry, with its Analog and Button served on `conn`, ready for a
+    /// device file.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<JoylinProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.name,
+            JoylinProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
 impl DeviceSpec for Joylin {
     fn name(&self) -> &str {
         &self.name
@@ -35,7 +48,7 @@ impl DeviceSpec for Joylin {
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
-        let driver = JoylinDriver::new(self, cx.conn())?;
-        Ok(vec![serve_port(&self.device, driver, cx)])
+        let protocol = JoylinProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.name, &self.device, protocol, cx)])
     }
 }

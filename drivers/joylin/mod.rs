@@ -1,5 +1,7 @@
-//! The Linux joystick interface (`/dev/input/jsN`, C++ `vrpn_Joylin`): a sans-IO
-//! [`SerialDriver`] that reads `js_event` records, and a joystick simulator (`sim`, with the `sim` feature).
+//! The Linux joystick interface (`/dev/input/jsN`, C++ `vrpn_Joylin`): its `vrpn.cfg` line
+//! ([`config`]), a [`Protocol`] that reads `js_event` records (run by the shared
+//! [`Lifecycle`](crate::driver::Lifecycle): no reset, no watchdog), and a joystick simulator
+//! (`sim`, with the `sim` feature).
 //!
 //! # Configuration line served
 //!
@@ -54,8 +56,8 @@ use std::time::Instant;
 use self::event::{Framer, JsEvent, Kind};
 use crate::devices::text::TextSeverity;
 use crate::driver::registry::Driver;
-use crate::driver::text::with_text;
-use crate::serial::{PortKind, PortOps, SerialDriver};
+use crate::driver::{Cx, Protocol, Reset, Supervision};
+use crate::serial::PortKind;
 use crate::time::Now;
 use crate::{AnalogServer, ButtonServer, Connection, Error};
 
@@ -79,9 +81,8 @@ pub const MAX_BUTTONS: usize = 256;
 /// The text C++ sends when the device fails.
 pub const READ_ERROR: &str = "Error reading from joystick";
 
-/// A Linux joystick device. See the module documentation.
-pub struct JoylinDriver {
-    name: String,
+/// A Linux joystick's protocol. See the module documentation.
+pub struct JoylinProtocol {
     device: String,
     analog: AnalogServer,
     buttons: ButtonServer,
@@ -95,11 +96,10 @@ pub struct JoylinDriver {
     ignored: u64,
 }
 
-impl JoylinDriver {
-    /// The driver for a `vrpn_Joylin` entry, with its Analog and Button served on `conn`.
-    pub fn new(cfg: &Joylin, conn: &Connection) -> Result<JoylinDriver, Error> {
-        Ok(JoylinDriver {
-            name: cfg.name.clone(),
+impl JoylinProtocol {
+    /// The protocol of a `vrpn_Joylin` entry, with its Analog and Button served on `conn`.
+    pub fn new(cfg: &Joylin, conn: &Connection) -> Result<JoylinProtocol, Error> {
+        Ok(JoylinProtocol {
             device: cfg.device.clone(),
             analog: AnalogServer::new(&cfg.name, conn, DEFAULT_AXES)?,
             buttons: ButtonServer::new(&cfg.name, conn, DEFAULT_BUTTONS)?,
@@ -141,15 +141,8 @@ impl JoylinDriver {
         self.framer.total_skipped()
     }
 
-    fn say(&self, severity: TextSeverity, args: std::fmt::Arguments<'_>) {
-        // A failed send is the connection's business (it reports and drops the peer).
-        with_text(args, |text| {
-            let _ = self.analog.send_text(severity, 0, text);
-        });
-    }
-
     /// Applies an event to the state; false when it was ignored.
-    fn apply(&mut self, ev: &JsEvent) -> bool {
+    fn apply(&mut self, ev: &JsEvent, cx: &mut Cx<'_>) -> bool {
         let n = usize::from(ev.number);
         let (limit, what) = match ev.kind {
             Kind::Axis => (MAX_AXES, "axis"),
@@ -158,7 +151,7 @@ impl JoylinDriver {
         if n >= limit {
             self.ignored += 1;
             if self.ignored == 1 {
-                self.say(
+                cx.say(
                     TextSeverity::Warning,
                     format_args!(
                         "joystick {what} {n} is beyond the {limit} a VRPN device carries: \
@@ -195,21 +188,38 @@ impl JoylinDriver {
     }
 }
 
-impl SerialDriver for JoylinDriver {
-    fn name(&self) -> &str {
-        &self.name
-    }
+impl Protocol for JoylinProtocol {
+    const KIND: &'static str = "vrpn_Joylin";
 
     fn port_kind(&self) -> PortKind {
         PortKind::InputDevice
     }
 
-    fn opened(&mut self, _now: Now, _port: &mut PortOps) {
-        self.framer.clear();
-        self.init_pending = false;
+    /// An untouched joystick is silent, and that is not a fault: no watchdog.
+    fn supervision(&self) -> Supervision {
+        Supervision::QUIET
     }
 
-    fn received(&mut self, bytes: &[u8], arrived: Now, _port: &mut PortOps) {
+    /// No reset: the device sends its initial state as soon as it opens.
+    fn start_reset(&mut self, _cx: &mut Cx<'_>) -> Reset {
+        Reset::Done
+    }
+
+    fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
+        self.received(bytes, cx);
+        Reset::Done
+    }
+
+    fn reset_poll(&mut self, _cx: &mut Cx<'_>) -> Reset {
+        Reset::Done
+    }
+
+    fn reset_deadline(&self) -> Option<Instant> {
+        None
+    }
+
+    fn received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        let arrived = cx.now;
         let mut init_at = arrived;
         for &b in bytes {
             let (axes, buttons) = (self.analog.num_channels(), self.buttons.num_buttons());
@@ -227,9 +237,10 @@ impl SerialDriver for JoylinDriver {
                 continue;
             };
             self.counts_known |= ev.init;
-            if !self.apply(&ev) {
+            if !self.apply(&ev, cx) {
                 continue;
             }
+            cx.record(at);
             if ev.init {
                 if !self.init_pending {
                     init_at = at;
@@ -245,15 +256,13 @@ impl SerialDriver for JoylinDriver {
         }
     }
 
-    fn poll(&mut self, _now: Now, _port: &mut PortOps) {}
-
-    fn next_deadline(&self) -> Option<Instant> {
-        None
-    }
-
-    fn closed(&mut self, _now: Now) {
+    fn stopped(&mut self) {
         self.framer.clear();
         self.init_pending = false;
-        self.say(TextSeverity::Error, format_args!("{READ_ERROR}"));
+    }
+
+    /// C++'s text when the device fails.
+    fn lost(&mut self, cx: &mut Cx<'_>) {
+        cx.say(TextSeverity::Error, format_args!("{READ_ERROR}"));
     }
 }

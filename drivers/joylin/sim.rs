@@ -17,8 +17,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::event::{JsEvent, Kind};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim joylin PATH`: a joystick with 6 axes and 10 buttons.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "joylin",
+    about: "Linux joystick (js_event records): 6 axes, 10 buttons",
+    baud: 0,
+    line: "vrpn_Joylin Joy0 {PATH}",
+    make: |_| Box::new(JoystickSim::new(SimConfig::new(6, 10))),
+};
 
 /// How the simulated joystick is built and behaves.
 #[derive(Clone, Debug)]

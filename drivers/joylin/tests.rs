@@ -9,9 +9,10 @@ use std::time::{Duration, Instant};
 use super::config;
 use super::event::{JsEvent, Kind};
 use super::sim::{JoystickSim, SimConfig};
-use super::{JoylinDriver, DEFAULT_AXES, DEFAULT_BUTTONS, READ_ERROR};
+use super::{JoylinProtocol, DEFAULT_AXES, DEFAULT_BUTTONS, READ_ERROR};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::Lifecycle;
 use crate::serial::{PortKind, SerialDriver};
 use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
@@ -26,7 +27,7 @@ type Channels = (TimeVal, Vec<f64>);
 type Change = (TimeVal, i32, i32);
 
 struct Rig {
-    line: VirtualLine<JoylinDriver, JoystickSim>,
+    line: VirtualLine<Lifecycle<JoylinProtocol>, JoystickSim>,
     start: Now,
     analog: Shared<Channels>,
     changes: Shared<Change>,
@@ -43,7 +44,7 @@ fn rig(sim: SimConfig, tweak: impl FnOnce(&mut JoystickSim), seed: u64) -> Rig {
     set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg = joylin_cfg("vrpn_Joylin Joy0 /dev/input/js0\n");
     let conn = Connection::new_loopback();
-    let driver = JoylinDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let ar = AnalogRemote::on_connection("Joy0", &conn).unwrap();
     let br = ButtonRemote::on_connection("Joy0", &conn).unwrap();
     let (analog, changes): (Shared<Channels>, Shared<Change>) = Default::default();
@@ -187,7 +188,7 @@ impl Rig {
 fn port_kind_and_identity() {
     let r = rig(SimConfig::new(2, 2), |_| {}, 1);
     assert_eq!(r.line.driver.name(), "Joy0");
-    assert_eq!(r.line.driver.device(), "/dev/input/js0");
+    assert_eq!(r.line.driver.protocol().device(), "/dev/input/js0");
     assert_eq!(r.line.driver.port_kind(), PortKind::InputDevice);
     // Nothing is ever written to a joystick, and nothing waits on a deadline.
     assert!(r.line.written.is_empty());
@@ -208,8 +209,8 @@ fn initial_state_is_learned_and_reported_once() {
         2,
     );
     r.line.run_for(Duration::from_millis(100));
-    assert_eq!(r.line.driver.analog().num_channels(), 6);
-    assert_eq!(r.line.driver.buttons().num_buttons(), 12);
+    assert_eq!(r.line.driver.protocol().analog().num_channels(), 6);
+    assert_eq!(r.line.driver.protocol().buttons().num_buttons(), 12);
     let a = r.analog.borrow().clone();
     assert_eq!(a.len(), 1, "{a:?}");
     assert_eq!(a[0].1, vec![16_000.0 / 32767.0, 0.0, 0.0, 0.0, 0.0, -1.0]);
@@ -232,7 +233,7 @@ fn live_events_arrive_exactly_with_their_times() {
         );
         assert!(r.changes.borrow().len() >= 95);
         r.assert_exact(6, 12);
-        assert_eq!(r.line.driver.skipped_bytes(), 0);
+        assert_eq!(r.line.driver.protocol().skipped_bytes(), 0);
     }
 }
 
@@ -241,16 +242,22 @@ fn counts_default_to_two_and_grow_without_an_initial_state() {
     // Fewer than C++'s defaults: the defaults stand.
     let mut r = rig(SimConfig::new(1, 1), |_| {}, 5);
     r.line.run_for(Duration::from_millis(200));
-    assert_eq!(r.line.driver.analog().num_channels(), DEFAULT_AXES);
-    assert_eq!(r.line.driver.buttons().num_buttons(), DEFAULT_BUTTONS);
+    assert_eq!(
+        r.line.driver.protocol().analog().num_channels(),
+        DEFAULT_AXES
+    );
+    assert_eq!(
+        r.line.driver.protocol().buttons().num_buttons(),
+        DEFAULT_BUTTONS
+    );
     r.assert_exact(DEFAULT_AXES, DEFAULT_BUTTONS);
     // A stand-in that sends live events only: the counts grow as events name higher numbers.
     let mut r = rig(SimConfig::new(5, 9), |s| s.skip_initial_state(), 6);
     r.line.run_for(Duration::from_millis(22));
-    assert!(r.line.driver.analog().num_channels() < 5);
+    assert!(r.line.driver.protocol().analog().num_channels() < 5);
     r.line.run_for(Duration::from_secs(1));
-    assert_eq!(r.line.driver.analog().num_channels(), 5);
-    assert_eq!(r.line.driver.buttons().num_buttons(), 9);
+    assert_eq!(r.line.driver.protocol().analog().num_channels(), 5);
+    assert_eq!(r.line.driver.protocol().buttons().num_buttons(), 9);
     let a = r.analog.borrow();
     assert!(a.first().unwrap().1.len() <= 3 && a.last().unwrap().1.len() == 5);
 }
@@ -268,9 +275,9 @@ fn numbers_beyond_the_limits_are_ignored_with_one_warning() {
     r.line.inject(&bad.encode());
     r.line.inject(&bad.encode());
     r.line.run_for(Duration::from_millis(100));
-    assert_eq!(r.line.driver.ignored(), 2);
+    assert_eq!(r.line.driver.protocol().ignored(), 2);
     assert_eq!(r.texts_with("axis 200 is beyond"), 1);
-    assert_eq!(r.line.driver.analog().num_channels(), 2);
+    assert_eq!(r.line.driver.protocol().analog().num_channels(), 2);
 }
 
 #[test]
@@ -285,7 +292,7 @@ fn a_damaged_stream_resyncs() {
     let after = r.line.now();
     // Every axis moves and every button toggles twice within 100 ms of events.
     r.line.run_for(Duration::from_secs(1));
-    assert!(r.line.driver.skipped_bytes() >= 19);
+    assert!(r.line.driver.protocol().skipped_bytes() >= 19);
     r.assert_exact_since(after.wall.plus(Duration::from_millis(200)), 4, 4);
 }
 
@@ -336,4 +343,21 @@ fn every_config_variant_builds_and_bad_lines_are_named() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("bad.cfg") && e.contains('2'), "{e}");
+}
+
+#[test]
+fn a_reopen_never_invents_data() {
+    let mut r = rig(SimConfig::new(3, 3), |_| {}, 11);
+    r.line.run_for(Duration::from_millis(200));
+    let (analog, changes) = (r.analog.borrow().len(), r.changes.borrow().len());
+    r.line.close();
+    // Closed: nothing reported (no zeroed axes, no released buttons).
+    assert!(r.line.run_until(Duration::from_secs(2), |l| l.opens == 2));
+    assert_eq!(r.analog.borrow().len(), analog);
+    assert_eq!(r.changes.borrow().len(), changes);
+    // Back: what the client sees is exactly what the device sends, its initial state first.
+    r.line.device.plugged();
+    let back = r.line.now();
+    r.line.run_for(Duration::from_millis(300));
+    r.assert_exact_since(back.wall.plus(Duration::from_millis(1)), 3, 3);
 }

@@ -1,11 +1,12 @@
 //! The `vrpn_Magellan` line: its fields, its parser, what it serves and how it is built.
 
-use super::MagellanDriver;
+use super::MagellanProtocol;
 use crate::config::{ConfigError, ConfigErrorKind, ConfigLine};
 use crate::devices::ServerDevice;
 use crate::driver::registry::{BuildContext, DeviceSpec, Interface, Served};
-use crate::driver::serve_port;
+use crate::driver::{serve, Lifecycle};
 use crate::error::Error;
+use crate::Connection;
 
 /// `vrpn_Magellan NAME PORT BAUD [altreset]`: Magellan / SpaceMouse on a serial port.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -42,6 +43,18 @@ pub(super) fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>
     }))
 }
 
+impl Magellan {
+    /// The driver for this entry, with its Analog and Button served on `conn`, ready for a
+    /// port.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<MagellanProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.name,
+            MagellanProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
 impl DeviceSpec for Magellan {
     fn name(&self) -> &str {
         &self.name
@@ -52,7 +65,7 @@ impl DeviceSpec for Magellan {
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
-        let driver = MagellanDriver::new(self, cx.conn())?;
-        Ok(vec![serve_port(&self.port, driver, cx)])
+        let protocol = MagellanProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.name, &self.port, protocol, cx)])
     }
 }

@@ -1,4 +1,5 @@
-//! Finding Magellan records in the byte stream, one byte at a time.
+//! Finding Magellan records in the byte stream, one byte at a time, with the shared framer
+//! ([`crate::driver::framing`]).
 //!
 //! A record starts with a known letter, has the length that letter gives, carries only
 //! nibble characters, and ends with CR. A byte that breaks these rules ends the record being
@@ -7,178 +8,31 @@
 //! arrival of its letter.
 
 use super::record::{is_nibble_char, record_len, CR, MAX_RECORD};
-use crate::time::Now;
+use crate::driver::framing::{self, RecordFormat};
 
-/// Why bytes were dropped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Problem {
-    /// A byte that starts no record where a record should start.
-    NotRecordStart(u8),
-    /// A byte that is not a data character inside a record.
-    BadCharacter(u8),
-    /// The last byte of a record was not CR.
-    NoCarriageReturn(u8),
-}
+pub use crate::driver::framing::{Problem, Skipped};
 
-/// One complete record.
-#[derive(Clone, Copy, Debug)]
-pub struct Record {
-    bytes: [u8; MAX_RECORD],
-    len: usize,
-    /// When the poll woke for its first byte.
-    pub first_byte: Now,
-}
+/// The Magellan's record shape.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Format;
 
-impl Record {
-    /// The record, letter and CR included.
-    pub fn bytes(&self) -> &[u8] {
-        &self.bytes[..self.len]
+impl RecordFormat for Format {
+    fn start(&self, b: u8) -> Option<usize> {
+        record_len(b)
     }
-
-    /// Its letter.
-    pub fn letter(&self) -> u8 {
-        self.bytes[0]
+    fn is_data(&self, b: u8) -> bool {
+        is_nibble_char(b)
+    }
+    fn last(&self) -> u8 {
+        CR
     }
 }
 
-impl PartialEq for Record {
-    fn eq(&self, other: &Record) -> bool {
-        self.bytes() == other.bytes() && self.first_byte == other.first_byte
-    }
-}
+/// One complete record: its letter is [`Record::start`](framing::Framed::start).
+pub type Record = framing::Framed<MAX_RECORD>;
 
-impl Eq for Record {}
-
-/// Bytes dropped before a record, and the first reason.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Skipped {
-    /// How many.
-    pub bytes: u64,
-    /// Why the first of them was dropped.
-    pub first: Problem,
-}
-
-/// A record and what was dropped since the previous one.
-#[derive(Clone, Copy, Debug)]
-pub struct Framed {
-    /// The record.
-    pub record: Record,
-    /// Garbage dropped between the previous record and this one.
-    pub skipped: Option<Skipped>,
-}
-
-/// The framing state.
-#[derive(Debug)]
-pub struct Framer {
-    buf: [u8; MAX_RECORD],
-    len: usize,
-    want: usize,
-    first_byte: Option<Now>,
-    skipped: Option<Skipped>,
-    total_skipped: u64,
-}
-
-impl Default for Framer {
-    fn default() -> Framer {
-        Framer::new()
-    }
-}
-
-impl Framer {
-    /// Waiting for a record start.
-    pub fn new() -> Framer {
-        Framer {
-            buf: [0; MAX_RECORD],
-            len: 0,
-            want: 0,
-            first_byte: None,
-            skipped: None,
-            total_skipped: 0,
-        }
-    }
-
-    /// Forgets any partial record and pending garbage count (after a flush or reopen).
-    pub fn clear(&mut self) {
-        self.len = 0;
-        self.want = 0;
-        self.first_byte = None;
-        self.skipped = None;
-    }
-
-    /// Bytes dropped since construction.
-    pub fn total_skipped(&self) -> u64 {
-        self.total_skipped
-    }
-
-    /// Takes one byte that arrived at `arrived`; returns a record when this byte completes one.
-    pub fn push(&mut self, b: u8, arrived: Now) -> Option<Framed> {
-        if self.want == 0 {
-            self.start(b, arrived);
-            return None;
-        }
-        if self.len + 1 == self.want {
-            if b != CR {
-                self.drop_partial(Problem::NoCarriageReturn(b));
-                self.start(b, arrived);
-                return None;
-            }
-            self.buf[self.len] = b;
-            let record = Record {
-                bytes: self.buf,
-                len: self.want,
-                first_byte: self.first_byte.unwrap_or(arrived),
-            };
-            self.len = 0;
-            self.want = 0;
-            self.first_byte = None;
-            return Some(Framed {
-                record,
-                skipped: self.skipped.take(),
-            });
-        }
-        if !is_nibble_char(b) {
-            self.drop_partial(Problem::BadCharacter(b));
-            self.start(b, arrived);
-            return None;
-        }
-        self.buf[self.len] = b;
-        self.len += 1;
-        None
-    }
-
-    fn start(&mut self, b: u8, arrived: Now) {
-        match record_len(b) {
-            Some(n) => {
-                self.buf[0] = b;
-                self.len = 1;
-                self.want = n;
-                self.first_byte = Some(arrived);
-            }
-            None => self.skip(1, Problem::NotRecordStart(b)),
-        }
-    }
-
-    fn drop_partial(&mut self, why: Problem) {
-        let n = self.len as u64;
-        self.len = 0;
-        self.want = 0;
-        self.first_byte = None;
-        self.skip(n, why);
-    }
-
-    fn skip(&mut self, n: u64, why: Problem) {
-        self.total_skipped += n;
-        match &mut self.skipped {
-            Some(s) => s.bytes += n,
-            None => {
-                self.skipped = Some(Skipped {
-                    bytes: n,
-                    first: why,
-                })
-            }
-        }
-    }
-}
+/// The Magellan's framer.
+pub type Framer = framing::Framer<Format, MAX_RECORD>;
 
 #[cfg(test)]
 mod tests {
@@ -186,7 +40,7 @@ mod tests {
 
     use super::super::record::{encode_axes, encode_keys};
     use super::*;
-    use crate::time::TimeVal;
+    use crate::time::{Now, TimeVal};
 
     fn at(ms: u64, base: Instant) -> Now {
         Now {
@@ -195,30 +49,30 @@ mod tests {
         }
     }
 
-    fn frame_all(f: &mut Framer, bytes: &[u8], t: Now) -> Vec<Framed> {
+    fn frame_all(f: &mut Framer, bytes: &[u8], t: Now) -> Vec<Record> {
         bytes.iter().filter_map(|&b| f.push(b, t)).collect()
     }
 
     #[test]
     fn records_in_pieces_keep_their_first_byte_time() {
         let base = Instant::now();
-        let mut f = Framer::new();
+        let mut f = Framer::new(Format);
         let d = encode_axes(&[1, 2, 3, 4, 5, 6]);
         assert!(frame_all(&mut f, &d[..10], at(1, base)).is_empty());
         let got = frame_all(&mut f, &d[10..], at(7, base));
         assert_eq!(got.len(), 1);
-        assert_eq!(got[0].record.bytes(), &d[..]);
-        assert_eq!(got[0].record.first_byte, at(1, base));
+        assert_eq!(got[0].bytes(), &d[..]);
+        assert_eq!(got[0].first_byte, at(1, base));
         assert!(got[0].skipped.is_none());
         let got = frame_all(&mut f, b"z\rb\rnH\r", at(9, base));
-        let letters: Vec<u8> = got.iter().map(|g| g.record.letter()).collect();
+        let letters: Vec<u8> = got.iter().map(|g| g.start()).collect();
         assert_eq!(letters, b"zbn");
     }
 
     #[test]
     fn garbage_costs_only_the_record_it_hits() {
         let base = Instant::now();
-        let mut f = Framer::new();
+        let mut f = Framer::new(Format);
         let k = encode_keys(0x155);
         let d = encode_axes(&[-7000, 0, 9, 100, -100, 7000]);
         let mut stream = Vec::new();
@@ -236,7 +90,7 @@ mod tests {
         stream.push(b'A');
         stream.extend_from_slice(&k);
         let got = frame_all(&mut f, &stream, at(0, base));
-        let recs: Vec<&[u8]> = got.iter().map(|g| g.record.bytes()).collect();
+        let recs: Vec<&[u8]> = got.iter().map(|g| g.bytes()).collect();
         assert_eq!(recs, vec![&d[..], &k[..], &k[..]]);
         assert_eq!(
             got[0].skipped,
@@ -251,7 +105,7 @@ mod tests {
         assert_eq!(s1.first, Problem::BadCharacter(b'1'));
         assert_eq!(s1.bytes, 26);
         let s2 = got[2].skipped.unwrap();
-        assert_eq!(s2.first, Problem::NoCarriageReturn(b'A'));
+        assert_eq!(s2.first, Problem::BadLastByte(b'A'));
         assert_eq!(s2.bytes, 5);
         assert_eq!(f.total_skipped(), 6 + 26 + 5);
     }

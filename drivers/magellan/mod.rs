@@ -1,4 +1,5 @@
-//! Logitech / 3Dconnexion Magellan (SpaceMouse) on a serial line: a sans-IO [`SerialDriver`]
+//! Logitech / 3Dconnexion Magellan (SpaceMouse) on a serial line: its `vrpn.cfg` line
+//! ([`config`]), its [`Protocol`] run by the shared [`Lifecycle`](crate::driver::Lifecycle),
 //! and a device simulator (`sim`, with the `sim` feature).
 //!
 //! # Configuration line served
@@ -29,7 +30,7 @@
 //!
 //! Opening the port starts the reset ([`reset`]); records are found byte by byte
 //! ([`framer`]), so garbage costs at most the record it hits, and dropped bytes are reported
-//! in a warning text at most once per [`NOTE_INTERVAL`]. A mode record that says the device
+//! in a warning text at most once a second. A mode record that says the device
 //! was switched to mouse mode sends an error text and resets it.
 //!
 //! The device sends only when the puck moves or a key changes, so silence is normal. After
@@ -47,8 +48,9 @@
 //!   are checked for data characters, not only for the final CR.
 //! * The mode query above: C++ has no watchdog and never notices a device that stopped
 //!   answering.
-//! * A reset reports the zeroed channels and released buttons (C++ zeroes them silently, so a
-//!   client keeps the old values).
+//! * A reset invents nothing: keys keep the state the device last sent until its next key
+//!   record, and the axes read 0 once the device answers the zeroing command (`z`), as it
+//!   then says (C++ zeroes both silently, so a client keeps stale values).
 //! * Resets are announced by warning texts instead of lines on the server's standard error.
 
 pub mod config;
@@ -63,14 +65,14 @@ mod tests;
 
 use std::time::{Duration, Instant};
 
-use self::framer::{Framed, Framer, Problem, Skipped};
+use self::framer::{Format, Framer, Problem, Record};
 use self::record::{axis_raw, axis_value, keys, nibble, AXES, BUTTONS, MOUSE_MODE};
 use self::reset::{Failure, Progress, ResetSequence};
 use crate::devices::text::TextSeverity;
-use crate::driver::registry::Driver;
-use crate::driver::text::{with_text, Shown, ShownBytes};
-use crate::serial::{PortKind, PortOps, PortSettings, SerialDriver};
-use crate::time::{Now, TimeVal};
+use crate::driver::text::{Shown, ShownBytes};
+use crate::driver::{Cx, Driver, Protocol, Reset, Supervision};
+use crate::serial::{PortKind, PortSettings};
+use crate::time::TimeVal;
 use crate::{AnalogServer, ButtonServer, Connection, Error};
 
 pub use self::config::Magellan;
@@ -88,63 +90,43 @@ pub const IDLE_PROBE: Duration = Duration::from_secs(2);
 pub const PROBE_TIMEOUT: Duration = Duration::from_secs(1);
 /// The query: "which mode are you in?", answered by a mode record.
 pub const PROBE: &[u8] = b"mQ\r";
-/// At most one note about dropped bytes per this interval.
-pub const NOTE_INTERVAL: Duration = Duration::from_secs(1);
 
-/// Where the driver is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
-    Closed,
-    Resetting,
-    Streaming,
-}
-
-/// A Magellan on one serial port.
-pub struct MagellanDriver {
-    name: String,
+/// The Magellan's protocol. See the module documentation.
+pub struct MagellanProtocol {
     port: String,
     baud: u32,
     analog: AnalogServer,
     buttons: ButtonServer,
     framer: Framer,
     reset: ResetSequence,
-    mode: Mode,
     null_radius: i32,
     /// First byte of the last record, or the end of the reset: the probe's start.
-    last_record: Option<Now>,
+    last_record: Option<Instant>,
     probe_deadline: Option<Instant>,
     probes: u64,
-    records: u64,
     resets: u64,
-    unreported: Option<Skipped>,
-    last_note: Option<Instant>,
 }
 
-impl MagellanDriver {
-    /// The driver for a `vrpn_Magellan` entry, with its Analog and Button served on `conn`.
-    pub fn new(cfg: &Magellan, conn: &Connection) -> Result<MagellanDriver, Error> {
+impl MagellanProtocol {
+    /// The protocol of a `vrpn_Magellan` entry, with its Analog and Button served on `conn`.
+    pub fn new(cfg: &Magellan, conn: &Connection) -> Result<MagellanProtocol, Error> {
         let plan = if cfg.alt_reset {
             reset::ALTERNATIVE
         } else {
             reset::NORMAL
         };
-        Ok(MagellanDriver {
-            name: cfg.name.clone(),
+        Ok(MagellanProtocol {
             port: cfg.port.clone(),
             baud: cfg.baud,
             analog: AnalogServer::new(&cfg.name, conn, AXES)?,
             buttons: ButtonServer::new(&cfg.name, conn, BUTTONS)?,
-            framer: Framer::new(),
+            framer: Framer::new(Format),
             reset: ResetSequence::new(plan),
-            mode: Mode::Closed,
             null_radius: record::RESET_NULL_RADIUS,
             last_record: None,
             probe_deadline: None,
             probes: 0,
-            records: 0,
             resets: 0,
-            unreported: None,
-            last_note: None,
         })
     }
 
@@ -163,19 +145,9 @@ impl MagellanDriver {
         &self.buttons
     }
 
-    /// True once a reset succeeded and records are decoded.
-    pub fn is_streaming(&self) -> bool {
-        self.mode == Mode::Streaming
-    }
-
     /// The null radius in force.
     pub fn null_radius(&self) -> i32 {
         self.null_radius
-    }
-
-    /// Good records decoded since construction (reset answers excluded).
-    pub fn records(&self) -> u64 {
-        self.records
     }
 
     /// Resets begun since construction (the first one included).
@@ -193,52 +165,28 @@ impl MagellanDriver {
         self.framer.total_skipped()
     }
 
-    fn say(&self, severity: TextSeverity, args: std::fmt::Arguments<'_>) {
-        // A failed send is the connection's business (it reports and drops the peer).
-        with_text(args, |t| {
-            let _ = self.analog.send_text(severity, 0, t);
-        });
-    }
-
-    /// Zeroes the values (reporting what changed) and starts the reset.
-    fn begin_reset(&mut self, now: Now, port: &mut PortOps) {
-        self.mode = Mode::Resetting;
-        self.resets += 1;
-        self.framer.clear();
-        self.last_record = None;
-        self.probe_deadline = None;
-        self.unreported = None;
-        self.analog.channels_mut().fill(0.0);
-        for i in 0..BUTTONS {
-            self.buttons.set_button(i, false);
-        }
-        self.send_reports(now.wall);
-        port.flush_input();
-        self.reset.start(now, port);
-    }
-
-    fn progress(&mut self, p: Progress, now: Now) {
+    fn progress(&mut self, p: Progress, cx: &mut Cx<'_>) -> Reset {
         match p {
-            Progress::Busy => {}
+            Progress::Busy => Reset::Working,
             Progress::Done => {
-                self.mode = Mode::Streaming;
                 self.null_radius = record::RESET_NULL_RADIUS;
-                self.last_record = Some(now);
+                self.last_record = Some(cx.now.mono);
+                Reset::Done
             }
             Progress::Failed(f) => {
                 let sev = TextSeverity::Warning;
                 match f {
-                    Failure::NoResponse => self.say(
+                    Failure::NoResponse => cx.say(
                         sev,
                         format_args!("vrpn_Magellan reset: No response from device"),
                     ),
-                    Failure::TooFew { got, want } => self.say(
+                    Failure::TooFew { got, want } => cx.say(
                         sev,
                         format_args!(
                             "vrpn_Magellan reset: Got {got} of {want} expected answers, retrying"
                         ),
                     ),
-                    Failure::WrongAnswer { index, got } => self.say(
+                    Failure::WrongAnswer { index, got } => cx.say(
                         sev,
                         format_args!(
                             "vrpn_Magellan reset: Bad reset string (expected {}, got {}), retrying",
@@ -247,48 +195,33 @@ impl MagellanDriver {
                         ),
                     ),
                 }
+                // The sequence pauses and starts the next attempt itself, so that axis and
+                // key records keep being reported meanwhile.
+                Reset::Working
             }
         }
     }
 
-    fn note_skipped(&mut self, skipped: Option<Skipped>, at: Now) {
-        if let Some(s) = skipped {
-            match &mut self.unreported {
-                Some(u) => u.bytes += s.bytes,
-                None => self.unreported = Some(s),
-            }
-        }
-        let Some(u) = self.unreported else { return };
-        if self.last_note.is_some_and(|t| at.mono < t + NOTE_INTERVAL) {
-            return;
-        }
-        self.last_note = Some(at.mono);
-        self.unreported = None;
-        let (what, b) = match u.first {
-            Problem::NotRecordStart(b) => ("a byte that starts no record", b),
-            Problem::BadCharacter(b) => ("a bad character in a record", b),
-            Problem::NoCarriageReturn(b) => ("no carriage return at the end of a record", b),
-        };
-        self.say(
-            TextSeverity::Warning,
-            format_args!(
-                "vrpn_Magellan: skipped {} bytes to resynchronise (first: {what}, {})",
-                u.bytes,
-                Shown(b)
-            ),
-        );
-    }
-
-    /// Decodes and reports one record; false when it started a reset.
-    fn report(&mut self, framed: Framed, port: &mut PortOps) -> bool {
-        let rec = framed.record;
+    /// Decodes and reports one record; false when it asked for a reset.
+    fn report(&mut self, rec: &Record, cx: &mut Cx<'_>) -> bool {
         let at = rec.first_byte;
-        self.note_skipped(framed.skipped, at);
-        self.last_record = Some(at);
+        if let Some(s) = rec.skipped {
+            let (what, b) = match s.first {
+                Problem::NotRecordStart(b) => ("a byte that starts no record", b),
+                Problem::BadCharacter(b) => ("a bad character in a record", b),
+                Problem::BadLastByte(b) => ("no carriage return at the end of a record", b),
+            };
+            cx.skipped(
+                s.bytes,
+                Self::KIND,
+                format_args!(" (first: {what}, {})", Shown(b)),
+            );
+        }
+        cx.record(at);
+        self.last_record = Some(at.mono);
         self.probe_deadline = None;
-        self.records += 1;
         let bytes = rec.bytes();
-        match rec.letter() {
+        match rec.start() {
             b'd' => {
                 for i in 0..AXES {
                     let v = axis_value(axis_raw(bytes, i), self.null_radius);
@@ -303,11 +236,11 @@ impl MagellanDriver {
             }
             b'n' => self.null_radius = i32::from(nibble(bytes[1])),
             b'm' if nibble(bytes[1]) & MOUSE_MODE != 0 => {
-                self.say(
+                cx.say(
                     TextSeverity::Error,
                     format_args!("vrpn_Magellan: Was put into mouse mode, resetting"),
                 );
-                self.begin_reset(at, port);
+                cx.reset();
                 return false;
             }
             // Beep, mode, sensitivity, zero, periods and compression answers need nothing.
@@ -324,97 +257,115 @@ impl MagellanDriver {
         let _ = self.buttons.report_changes_unfiltered();
     }
 
-    fn watchdog(&mut self, now: Now, port: &mut PortOps) {
-        if let Some(deadline) = self.probe_deadline {
-            if now.mono >= deadline {
-                self.say(
-                    TextSeverity::Error,
-                    format_args!("vrpn_Magellan: No answer to a mode query, resetting"),
-                );
-                self.begin_reset(now, port);
+    /// Streams `bytes`; stops at a record that asked for a reset (the rest of the read came
+    /// before the reset's flush).
+    fn stream(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        for &b in bytes {
+            if let Some(rec) = self.framer.push(b, cx.now) {
+                if !self.report(&rec, cx) {
+                    return;
+                }
             }
-            return;
-        }
-        if self
-            .last_record
-            .is_some_and(|t| now.mono >= t.mono + IDLE_PROBE)
-        {
-            port.write(PROBE);
-            self.probes += 1;
-            self.probe_deadline = Some(now.mono + PROBE_TIMEOUT);
         }
     }
 }
 
-impl SerialDriver for MagellanDriver {
-    fn name(&self) -> &str {
-        &self.name
-    }
+impl Protocol for MagellanProtocol {
+    const KIND: &'static str = "vrpn_Magellan";
 
     fn port_kind(&self) -> PortKind {
         PortKind::Serial(PortSettings::n81(self.baud))
     }
 
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
-        self.begin_reset(now, port);
+    /// The device sends only when something changes: no watchdog, the idle probe instead.
+    fn supervision(&self) -> Supervision {
+        Supervision::QUIET
     }
 
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => return,
-            Mode::Resetting => self.reset.saw_bytes(),
-            Mode::Streaming => {}
-        }
-        for &b in bytes {
-            let Some(framed) = self.framer.push(b, arrived) else {
+    fn start_reset(&mut self, cx: &mut Cx<'_>) -> Reset {
+        self.resets += 1;
+        self.last_record = None;
+        self.probe_deadline = None;
+        cx.flush_input();
+        self.reset.start(cx.now, cx.port());
+        Reset::Working
+    }
+
+    fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
+        self.reset.saw_bytes();
+        let mut outcome = Reset::Working;
+        for (i, &b) in bytes.iter().enumerate() {
+            let Some(rec) = self.framer.push(b, cx.now) else {
                 continue;
             };
-            match self.mode {
-                Mode::Closed => return,
+            if matches!(rec.start(), b'd' | b'k') {
                 // Axis and key records during a reset are fresh (the input was flushed).
-                Mode::Resetting if !matches!(framed.record.letter(), b'd' | b'k') => {
-                    let p = self.reset.record(&framed.record, arrived);
-                    self.progress(p, arrived);
+                if !self.report(&rec, cx) {
+                    return Reset::Working;
                 }
-                Mode::Resetting => {
-                    self.report(framed, port);
-                }
-                Mode::Streaming => {
-                    if !self.report(framed, port) {
-                        // The rest of this read came before the reset's flush.
-                        return;
-                    }
-                }
+                continue;
+            }
+            let p = self.reset.record(&rec, cx.now);
+            if rec.bytes() == reset::ZERO_ANSWER && !matches!(p, Progress::Failed(_)) {
+                // The device confirms it zeroed the puck: its axes read 0 from now on, as
+                // it says (keys are its own business: a held key stays held).
+                self.analog.channels_mut().fill(0.0);
+                // A failed send is the connection's business (it reports and drops the peer).
+                let _ = self.analog.report_changes(Some(rec.first_byte.wall));
+            }
+            outcome = self.progress(p, cx);
+            if outcome == Reset::Done {
+                self.stream(&bytes[i + 1..], cx);
+                return Reset::Done;
             }
         }
+        outcome
     }
 
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        match self.mode {
-            Mode::Closed => {}
-            Mode::Resetting => {
-                let p = self.reset.poll(now, port);
-                self.progress(p, now);
+    fn reset_poll(&mut self, cx: &mut Cx<'_>) -> Reset {
+        let p = self.reset.poll(cx.now, cx.port());
+        self.progress(p, cx)
+    }
+
+    fn reset_deadline(&self) -> Option<Instant> {
+        self.reset.deadline()
+    }
+
+    fn received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) {
+        self.stream(bytes, cx);
+    }
+
+    /// The idle probe: after [`IDLE_PROBE`] without a record, ask for the mode; no answer
+    /// within [`PROBE_TIMEOUT`] resets the device.
+    fn poll(&mut self, cx: &mut Cx<'_>) {
+        if let Some(deadline) = self.probe_deadline {
+            if cx.now.mono >= deadline {
+                cx.say(
+                    TextSeverity::Error,
+                    format_args!("vrpn_Magellan: No answer to a mode query, resetting"),
+                );
+                cx.reset();
             }
-            Mode::Streaming => self.watchdog(now, port),
+            return;
+        }
+        if self
+            .last_record
+            .is_some_and(|t| cx.now.mono >= t + IDLE_PROBE)
+        {
+            cx.write(PROBE);
+            self.probes += 1;
+            self.probe_deadline = Some(cx.now.mono + PROBE_TIMEOUT);
         }
     }
 
-    fn next_deadline(&self) -> Option<Instant> {
-        match self.mode {
-            Mode::Closed => None,
-            Mode::Resetting => self.reset.deadline(),
-            Mode::Streaming => self
-                .probe_deadline
-                .or_else(|| self.last_record.map(|t| t.mono + IDLE_PROBE)),
-        }
+    fn deadline(&self) -> Option<Instant> {
+        self.probe_deadline
+            .or_else(|| self.last_record.map(|t| t + IDLE_PROBE))
     }
 
-    fn closed(&mut self, _now: Now) {
-        self.mode = Mode::Closed;
+    fn stopped(&mut self) {
         self.reset.stop();
         self.framer.clear();
-        self.last_record = None;
         self.probe_deadline = None;
     }
 }

@@ -44,6 +44,9 @@ pub struct ResetPlan {
     pub answers: &'static [&'static [u8]],
 }
 
+/// The answer to the zeroing command: from then on the puck's axes read 0.
+pub const ZERO_ANSWER: &[u8] = b"z\r";
+
 /// The reset of current units.
 pub const NORMAL: ResetPlan = ResetPlan {
     commands: b"z\rm3\rc30\rnH\rbH\r",

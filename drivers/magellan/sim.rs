@@ -20,8 +20,17 @@ use std::time::{Duration, Instant};
 use super::record::{
     encode_axes, encode_keys, nibble, nibble_char, AXES, CR, MAX_RECORD, MOUSE_MODE,
 };
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// `vrpn_device_sim magellan PATH`: a Magellan whose puck keeps moving.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "magellan",
+    about: "Logitech/3Dconnexion Magellan: a puck that keeps moving, keys that change",
+    baud: 9600,
+    line: "vrpn_Magellan Magellan0 {PATH} {BAUD}",
+    make: |_| Box::new(MagellanSim::new(SimConfig::default())),
+};
 
 /// Records kept in [`MagellanSim::log`].
 pub const LOG_CAP: usize = 100_000;

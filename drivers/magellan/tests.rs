@@ -11,16 +11,17 @@ use super::config;
 use super::record::{axis_value, AXES, BUTTONS, RESET_NULL_RADIUS};
 use super::reset::{BYTE_GAP, RETRY_PAUSE};
 use super::sim::{MagellanSim, Sent, SentRecord, SimConfig};
-use super::{MagellanDriver, IDLE_PROBE, PROBE, PROBE_TIMEOUT};
+use super::{MagellanProtocol, IDLE_PROBE, PROBE, PROBE_TIMEOUT};
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::Lifecycle;
 use crate::serial::SerialDriver;
 use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
 use crate::sim::VirtualLine;
 use crate::{AnalogRemote, ButtonRemote, Connection, Now, SenderFilter, TimeVal};
 
-type Line = VirtualLine<MagellanDriver, MagellanSim>;
+type Line = VirtualLine<Lifecycle<MagellanProtocol>, MagellanSim>;
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 
 const START_WALL: TimeVal = TimeVal {
@@ -60,7 +61,7 @@ fn rig(cfg_text: &str, sim: SimConfig, seed: u64) -> Rig {
     set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg = magellan_cfg(cfg_text);
     let conn = Connection::new_loopback();
-    let driver = MagellanDriver::new(&cfg, &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
     let analog = AnalogRemote::on_connection(&cfg.name, &conn).unwrap();
     let buttons = ButtonRemote::on_connection(&cfg.name, &conn).unwrap();
     let events: Shared<Event> = Rc::default();
@@ -131,8 +132,18 @@ impl Rig {
 
     /// What a client must see for `log` (less the records `lost`), from all-zero values.
     fn expected(&self, log: &[SentRecord], lost: &[u64]) -> Vec<Event> {
-        let mut chans = [0.0; AXES];
-        let mut mask = 0u16;
+        self.expected_from(log, lost, [0.0; AXES], 0)
+    }
+
+    /// What a client must see for `log` (less the records `lost`), from the channels `chans`
+    /// and the keys `mask`.
+    fn expected_from(
+        &self,
+        log: &[SentRecord],
+        lost: &[u64],
+        mut chans: [f64; AXES],
+        mut mask: u16,
+    ) -> Vec<Event> {
         let mut out = Vec::new();
         // Only records whose second half has reached the driver.
         let complete = |r: &&SentRecord| {
@@ -219,7 +230,7 @@ fn paced_reset_then_exact_values_stamped_with_the_first_byte() {
         .borrow()
         .iter()
         .any(|e| matches!(e, Event::Button(..))));
-    assert_eq!(r.line.driver.skipped_bytes(), 0);
+    assert_eq!(r.line.driver.protocol().skipped_bytes(), 0);
     assert!(r.texts.borrow().is_empty(), "{:?}", r.texts.borrow());
 }
 
@@ -243,7 +254,7 @@ fn alternative_reset_works_where_the_normal_one_cannot() {
     let bad = r.texts_with("Bad reset string (expected c30\\r, got nH\\r)");
     assert!(bad >= 3, "{:?}", r.texts.borrow());
     // One attempt every (75 ms of writing + the pause).
-    assert!(r.line.driver.resets() == 1 && r.line.device.zeroed() >= 3);
+    assert!(r.line.driver.protocol().resets() == 1 && r.line.device.zeroed() >= 3);
     assert!(r.line.device.zeroed() as u32 <= 3_000 / RETRY_PAUSE.as_millis() as u32 + 1);
 }
 
@@ -289,7 +300,7 @@ fn garbage_costs_only_the_record_it_hits() {
     }
     r.line.run_for(Duration::from_millis(100));
     assert_same(&r.events.borrow(), &r.expected(&r.log(), &lost));
-    assert!(r.line.driver.skipped_bytes() > 6 * 10);
+    assert!(r.line.driver.protocol().skipped_bytes() > 6 * 10);
     // Noted at most once a second.
     let notes = r.texts_with("skipped");
     assert!((1..=2).contains(&notes), "{:?}", r.texts.borrow());
@@ -303,7 +314,7 @@ fn an_idle_device_is_queried_and_left_alone_while_it_answers() {
     let now = r.line.now();
     r.line.device.set_moving(false, now);
     r.line.run_for(Duration::from_millis(10_500));
-    let d = &r.line.driver;
+    let d = r.line.driver.protocol();
     // One query per 2 s of silence (each answer restarts the count).
     assert!((4..=5).contains(&d.probes()), "{} probes", d.probes());
     assert_eq!(d.resets(), 1);
@@ -343,14 +354,20 @@ fn a_hung_device_is_reset_until_it_answers_and_resumes() {
         "{noticed:?}"
     );
     assert_eq!(r.texts_with("No answer to a mode query, resetting"), 1);
-    // Zeroed values reported at the reset.
-    let last = *r.events.borrow().last().unwrap();
-    assert!(
-        matches!(last, Event::Analog(_, v) if v == [0.0; AXES])
-            || matches!(last, Event::Button(_, _, 0))
-    );
+    // The keys the driver holds (the device's last key record), and the events so far.
+    let held = r.line.driver.protocol().buttons();
+    let mask = (0..BUTTONS)
+        .filter(|&i| held.button(i).is_pressed())
+        .fold(0u16, |m, i| m | 1 << i);
+    let seen = r.events.borrow().len();
     r.line.run_for(Duration::from_secs(4));
     assert!(r.texts_with("No response from device") >= 2);
+    // A reset invents nothing: no zeroed channels, no released keys while the device is mute.
+    assert_eq!(
+        r.events.borrow().len(),
+        seen,
+        "events while the device was silent"
+    );
     r.line.device.set_silent(false);
     let woke = r.line.now().mono;
     let took = r.run_to_streaming(Duration::from_secs(3));
@@ -364,8 +381,53 @@ fn a_hung_device_is_reset_until_it_answers_and_resumes() {
         .copied()
         .filter(|e| e.time() > r.arrival(woke))
         .collect();
-    // After the resume, from zeroed values (the reset reported them), exactly the records.
-    let want = r.expected(&log, &[]);
+    // The device's answers to the zeroing command set the axes to 0 (it says so): each shows
+    // as an all-zero report between the records, at the answer's arrival. The keys stay as
+    // the device last sent them; otherwise exactly the records.
+    let zeroed: Vec<TimeVal> = after
+        .iter()
+        .filter_map(|e| match e {
+            Event::Analog(t, v) if *v == [0.0; AXES] => Some(*t),
+            _ => None,
+        })
+        .collect();
+    assert!(!zeroed.is_empty(), "the device's zeroing answer");
+    let mut want = Vec::new();
+    let mut chans = r
+        .events
+        .borrow()
+        .iter()
+        .rev()
+        .find_map(|e| match e {
+            Event::Analog(t, v) if *t <= r.arrival(woke) => Some(*v),
+            _ => None,
+        })
+        .unwrap_or([0.0; AXES]);
+    let mut keys = mask;
+    let mut rest = &log[..];
+    for z in &zeroed {
+        let n = rest.iter().take_while(|s| r.arrival(s.at) < *z).count();
+        let part = r.expected_from(&rest[..n], &[], chans, keys);
+        for e in &part {
+            match e {
+                Event::Analog(_, v) => chans = *v,
+                Event::Button(_, i, on) => {
+                    keys = if *on != 0 {
+                        keys | 1 << i
+                    } else {
+                        keys & !(1 << i)
+                    }
+                }
+            }
+        }
+        want.extend(part);
+        if chans != [0.0; AXES] {
+            want.push(Event::Analog(*z, [0.0; AXES]));
+            chans = [0.0; AXES];
+        }
+        rest = &rest[n..];
+    }
+    want.extend(r.expected_from(rest, &[], chans, keys));
     assert!(want.len() > 30);
     assert_same(&after, &want);
 }
@@ -379,7 +441,7 @@ fn mouse_mode_resets_the_device() {
     r.line.device.send_raw(b"mH\r", now);
     r.line.run_for(Duration::from_millis(20));
     assert_eq!(r.texts_with("Was put into mouse mode, resetting"), 1);
-    assert_eq!(r.line.driver.resets(), 2);
+    assert_eq!(r.line.driver.protocol().resets(), 2);
     r.run_to_streaming(Duration::from_millis(500));
     assert_eq!(r.line.device.zeroed(), 2);
 }
@@ -394,10 +456,10 @@ fn a_closed_port_is_reopened_and_reset() {
     assert_eq!(r.line.driver.next_deadline(), None);
     r.run_to_streaming(Duration::from_secs(2));
     assert_eq!(r.line.opens, 2);
-    assert_eq!(r.line.driver.resets(), 2);
-    let n = r.line.driver.records();
+    assert_eq!(r.line.driver.protocol().resets(), 2);
+    let n = r.line.driver.stats().records;
     r.line.run_for(Duration::from_millis(500));
-    assert!(r.line.driver.records() > n + 15);
+    assert!(r.line.driver.stats().records > n + 15);
 }
 
 #[test]
@@ -412,7 +474,7 @@ fn every_variant_parses_and_builds() {
         let cfg = magellan_cfg(text);
         assert_eq!(cfg.alt_reset, alt);
         let conn = Connection::new_loopback();
-        let d = MagellanDriver::new(&cfg, &conn).unwrap();
+        let d = MagellanProtocol::new(&cfg, &conn).unwrap();
         assert_eq!(d.reset.plan() == super::reset::ALTERNATIVE, alt);
         assert_eq!(d.analog().num_channels(), AXES);
         assert_eq!(d.buttons().num_buttons(), BUTTONS);
@@ -443,7 +505,7 @@ fn toggle_requests_do_not_filter_the_reports() {
     r.run_to_streaming(Duration::from_secs(1));
     r.line.run_for(Duration::from_secs(1));
     assert_eq!(
-        r.line.driver.buttons().mode(4),
+        r.line.driver.protocol().buttons().mode(4),
         crate::devices::button::TOGGLE_OFF
     );
     let want = r.expected(&r.log(), &[]);

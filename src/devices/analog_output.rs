@@ -171,9 +171,10 @@ impl AnalogOutputServer {
             }),
             callbacks: CallbackList::default(),
         });
-        let weak = conn.downgrade();
+        let (weak, s) = (conn.downgrade(), shared.clone());
         conn.on_event(ConnectionEvent::GotConnection, move || {
             if let Some(c) = weak.upgrade() {
+                let num = s.values.borrow().num_channel;
                 let mut buf = [0u8; codec::NumChannelsReport::LEN];
                 codec::NumChannelsReport { num_channels: num }.encode(&mut buf);
                 let _ = c.pack_message(
@@ -264,6 +265,14 @@ impl AnalogOutputServer {
     /// The current output values.
     pub fn values(&self) -> AnalogOutputValues {
         *self.shared.values.borrow()
+    }
+
+    /// Sets the number of active channels (clamped to 128), for a device that learns it when
+    /// it starts (a chain of positioners). Later requests are checked against it, and new
+    /// connections are told it; [`report_num_channels`](Self::report_num_channels) tells the
+    /// current ones.
+    pub fn set_num_channels(&self, n: usize) {
+        self.shared.values.borrow_mut().num_channel = n.min(CHANNEL_MAX) as i32;
     }
 
     /// Sends the channel count now (as on a new connection).

@@ -223,21 +223,49 @@ struct Target {
 impl Target {
     /// `host`, `host:port`, `tcp://host:port`, or any of these after `Name@` (C++ keeps the
     /// part after the last `@`).
-    fn parse(text: &str) -> Result<Target, String> {
+    /// `None` when the text is not a network server's location.
+    fn parse(text: &str) -> Option<Target> {
         let location = text.rsplit('@').next().unwrap_or(text);
-        match DeviceName::parse_location(location)? {
+        match DeviceName::parse_location(location).ok()? {
             Location::Net {
                 host,
                 port,
                 tcp_only,
-            } => Ok(Target {
+            } => Some(Target {
                 host,
                 port,
                 tcp_only,
             }),
-            _ => Err(format!(
-                "{text:?}: the connection to log must be a network server (host or host:port)"
-            )),
+            _ => None,
+        }
+    }
+}
+
+/// Why a logging request was refused (sent to the requester as text).
+#[derive(Debug)]
+enum RequestError {
+    /// A file name the folder refuses.
+    Refused(&'static str, Refusal),
+    /// The same local file for both directions.
+    SameFile,
+    /// No poll for the logging connection.
+    Poll(std::io::Error),
+    /// The server to log cannot be reached.
+    Connect(String, u16, Error),
+    /// The remote logs cannot be asked for.
+    Remote(Error),
+}
+
+impl std::fmt::Display for RequestError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RequestError::Refused(what, r) => write!(f, "{what} log: {r}"),
+            RequestError::SameFile => {
+                f.write_str("the local incoming and outgoing logs must be two files")
+            }
+            RequestError::Poll(e) => write!(f, "cannot poll: {e}"),
+            RequestError::Connect(host, port, e) => write!(f, "cannot reach {host}:{port}: {e}"),
+            RequestError::Remote(e) => e.fmt(f),
         }
     }
 }
@@ -260,7 +288,7 @@ struct ServerState {
 impl ServerState {
     /// Closes the current logs, then opens those asked for (C++ `handle_request_logging`).
     /// Returns the names to report and the refusal to send as a text, if any.
-    fn start(&mut self, files: LogFiles) -> (LogFiles, Option<String>) {
+    fn start(&mut self, files: LogFiles) -> (LogFiles, Option<RequestError>) {
         // Dropping the connection closes its logs (and its sockets).
         self.logging = None;
         self.current = LogFiles::default();
@@ -277,8 +305,8 @@ impl ServerState {
         }
     }
 
-    fn open(&mut self, files: &LogFiles) -> Result<Connection, String> {
-        let refused = |what: &str, r: Refusal| format!("{what} log: {r}");
+    fn open(&mut self, files: &LogFiles) -> Result<Connection, RequestError> {
+        let refused = RequestError::Refused;
         for (what, name) in [
             ("remote incoming", &files.remote_in),
             ("remote outgoing", &files.remote_out),
@@ -303,23 +331,23 @@ impl ServerState {
             }
         }
         if !files.local_in.is_empty() && files.local_in == files.local_out {
-            return Err("the local incoming and outgoing logs must be two files".into());
+            return Err(RequestError::SameFile);
         }
         let reactor = match &self.reactor {
             Some(r) => r.clone(),
-            None => Reactor::new().map_err(|e| format!("cannot poll: {e}"))?,
+            None => Reactor::new().map_err(RequestError::Poll)?,
         };
         let t = &self.target;
         let conn = Connection::client_in(&reactor, &t.host, t.port, t.tcp_only, self.limits)
-            .map_err(|e| format!("cannot reach {}:{}: {e}", t.host, t.port))?;
+            .map_err(|e| RequestError::Connect(t.host.clone(), t.port, e))?;
         let mut made = Vec::new();
-        let mut create = |what: &str, name: &str| {
+        let mut create = |what: &'static str, name: &str| {
             let (path, file) = self
                 .folder
                 .create(name.as_bytes())
                 .map_err(|r| refused(what, r))?;
             made.push(path.clone());
-            Ok::<_, String>((path, file))
+            Ok::<_, RequestError>((path, file))
         };
         let outcome = (|| {
             if !files.local_in.is_empty() {
@@ -342,7 +370,7 @@ impl ServerState {
         self.created.extend(made);
         if !files.remote_in.is_empty() || !files.remote_out.is_empty() {
             conn.request_remote_logging(&files.remote_in, &files.remote_out)
-                .map_err(|e| e.to_string())?;
+                .map_err(RequestError::Remote)?;
         }
         Ok(conn)
     }
@@ -372,9 +400,9 @@ impl AuxLoggerServer {
         connection_to_log: &str,
         folder: LogFolder,
     ) -> Result<AuxLoggerServer, Error> {
-        let target = Target::parse(connection_to_log).map_err(|_| {
-            Error::Unsupported("the connection to log must be a network server (host:port)")
-        })?;
+        let target = Target::parse(connection_to_log).ok_or(Error::Unsupported(
+            "the connection to log must be a network server (host:port)",
+        ))?;
         let (base, ids) = base::register_server(conn, device, AuxLoggerIds::register)?;
         let state = Rc::new(RefCell::new(ServerState {
             name: device.to_string(),

@@ -173,6 +173,11 @@ pub trait Protocol {
     /// the reset's progress. Must not report anything (a reset never invents data).
     fn stopped(&mut self) {}
 
+    /// The port failed or vanished (the serial layer has reported it and reopens it when it
+    /// comes back): a device whose C++ driver says something of its own says it here. Writes
+    /// go nowhere.
+    fn lost(&mut self, _cx: &mut Cx<'_>) {}
+
     /// The watchdog fired: say so. By default, C++ VRPN's two tracker texts.
     fn silent(&mut self, last_record: Now, cx: &mut Cx<'_>) {
         let (cur, ts) = (cx.now.wall, last_record.wall);
@@ -242,13 +247,14 @@ enum Request {
 }
 
 /// Where a device's text messages go: its sender on the server connection.
-struct Texts {
+pub struct Texts {
     conn: Connection,
     sender: Option<SenderId>,
 }
 
 impl Texts {
-    fn say(&self, severity: TextSeverity, args: fmt::Arguments<'_>) {
+    /// Sends a VRPN text message from the device, formatted on the stack (no allocation).
+    pub fn say(&self, severity: TextSeverity, args: fmt::Arguments<'_>) {
         if let Some(sender) = self.sender {
             // A failed send is the connection's business (it reports and drops the peer).
             with_text(args, |text| {
@@ -310,6 +316,12 @@ impl Cx<'_> {
     /// [`PortOps`]).
     pub fn port(&mut self) -> &mut PortOps {
         self.port
+    }
+
+    /// The port and the device's texts at once, for a part (a reset state machine) that
+    /// writes and speaks in the same call.
+    pub fn port_and_texts(&mut self) -> (&mut PortOps, &Texts) {
+        (self.port, self.texts)
     }
 
     /// Sends a VRPN text message from the device, formatted on the stack (no allocation):
@@ -384,6 +396,8 @@ pub struct Lifecycle<P: Protocol> {
     stats: Stats,
     skips: SkipNotes,
     request: Request,
+    /// Requests made while no port is open (in [`Protocol::lost`]), dropped.
+    nowhere: PortOps,
 }
 
 impl<P: Protocol> Lifecycle<P> {
@@ -402,6 +416,7 @@ impl<P: Protocol> Lifecycle<P> {
             stats: Stats::default(),
             skips: SkipNotes::default(),
             request: Request::None,
+            nowhere: PortOps::new(),
         }
     }
 
@@ -627,10 +642,14 @@ impl<P: Protocol> SerialDriver for Lifecycle<P> {
         }
     }
 
-    fn closed(&mut self, _now: Now) {
+    fn closed(&mut self, now: Now) {
         self.phase = Phase::Closed;
         self.protocol.stopped();
         self.last_record = None;
+        let mut nowhere = std::mem::take(&mut self.nowhere);
+        self.call(now, &mut nowhere, |p, cx| p.lost(cx));
+        nowhere.clear();
+        self.nowhere = nowhere;
         self.request = Request::None;
     }
 }

@@ -13,6 +13,7 @@
 //!                                      config struct)       server's one reactor
 //! ```
 
+pub mod framing;
 pub mod lifecycle;
 pub mod registry;
 pub mod status;
@@ -20,7 +21,7 @@ pub mod text;
 pub mod udp;
 
 pub use lifecycle::{
-    Cx, Lifecycle, Pause, Phase, Protocol, Recovery, Reset, Retry, Stats, Supervision,
+    Cx, Lifecycle, Pause, Phase, Protocol, Recovery, Reset, Retry, Stats, Supervision, Texts,
 };
 pub use registry::{BuildContext, DeviceSpec, Driver, Hint, Interface, Served};
 pub use status::{DeviceStatus, OpenFailure, StatusSink};

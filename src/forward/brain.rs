@@ -102,6 +102,64 @@ struct Forwarding {
     forwarder: ConnectionForwarder,
 }
 
+/// Why a client's forwarding request is refused (told as a warning notice on the server).
+#[derive(Debug)]
+enum Refusal {
+    /// The port asked for is not a port number.
+    NotAPort(i32),
+    /// No ports are allowed (`vrpn_server -forwardports` was not given).
+    ForwardingOff(u16),
+    /// The port lies outside the allowed range.
+    NotAllowed {
+        port: u16,
+        allowed: RangeInclusive<u16>,
+    },
+    /// The port is already being forwarded on.
+    AlreadyForwarding(u16),
+    /// The server connection has been dropped.
+    ServerGone,
+    /// The port could not be listened on.
+    CannotListen { port: u16, error: Error },
+    /// A forward request names a port no start request opened.
+    NotOpen(i32),
+    /// The forwarder refused the type or sender.
+    CannotForward {
+        type_name: String,
+        sender: String,
+        error: Error,
+    },
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Refusal::NotAPort(port) => write!(f, "port {port} is not a port number"),
+            Refusal::ForwardingOff(port) => write!(
+                f,
+                "a client asked to forward on port {port}; forwarding is off (vrpn_server \
+                 -forwardports LOW-HIGH allows it)"
+            ),
+            Refusal::NotAllowed { port, allowed } => write!(
+                f,
+                "a client asked to forward on port {port}, outside the ports allowed ({}-{})",
+                allowed.start(),
+                allowed.end()
+            ),
+            Refusal::AlreadyForwarding(port) => write!(f, "already forwarding on port {port}"),
+            Refusal::ServerGone => f.write_str("the server is gone"),
+            Refusal::CannotListen { port, error } => {
+                write!(f, "cannot forward on port {port}: {error}")
+            }
+            Refusal::NotOpen(port) => write!(f, "no forwarding open on port {port}"),
+            Refusal::CannotForward {
+                type_name,
+                sender,
+                error,
+            } => write!(f, "cannot forward {type_name:?} of {sender:?}: {error}"),
+        }
+    }
+}
+
 struct State {
     source: crate::connection::WeakConnection,
     allowed: Option<RangeInclusive<u16>>,
@@ -117,32 +175,28 @@ impl State {
         }
     }
 
-    fn start(&mut self, port: i32) -> Result<u16, String> {
+    fn start(&mut self, port: i32) -> Result<u16, Refusal> {
         let Ok(port) = u16::try_from(port) else {
-            return Err(format!("port {port} is not a port number"));
+            return Err(Refusal::NotAPort(port));
         };
         let Some(allowed) = &self.allowed else {
-            return Err(format!(
-                "a client asked to forward on port {port}; forwarding is off (vrpn_server \
-                 -forwardports LOW-HIGH allows it)"
-            ));
+            return Err(Refusal::ForwardingOff(port));
         };
         if !allowed.contains(&port) {
-            return Err(format!(
-                "a client asked to forward on port {port}, outside the ports allowed ({}-{})",
-                allowed.start(),
-                allowed.end()
-            ));
+            return Err(Refusal::NotAllowed {
+                port,
+                allowed: allowed.clone(),
+            });
         }
         if self.ports.iter().any(|f| f.port == port) {
-            return Err(format!("already forwarding on port {port}"));
+            return Err(Refusal::AlreadyForwarding(port));
         }
-        let source = self.source.upgrade().ok_or("the server is gone")?;
+        let source = self.source.upgrade().ok_or(Refusal::ServerGone)?;
         let connection = match source.reactor() {
             Some(r) => Connection::server_in(&r, self.nic, port, self.limits),
             None => Connection::server_with_limits(self.nic, port, self.limits),
         }
-        .map_err(|e| format!("cannot forward on port {port}: {e}"))?;
+        .map_err(|error| Refusal::CannotListen { port, error })?;
         let forwarder = ConnectionForwarder::new(&source, &connection);
         self.ports.push(Forwarding {
             port,
@@ -152,11 +206,11 @@ impl State {
         Ok(port)
     }
 
-    fn forward(&mut self, f: &Forward<'_>) -> Result<String, String> {
+    fn forward(&mut self, f: &Forward<'_>) -> Result<String, Refusal> {
         let sender = String::from_utf8_lossy(f.sender).into_owned();
         let type_name = String::from_utf8_lossy(f.type_name).into_owned();
         let Some(it) = self.ports.iter_mut().find(|p| i32::from(p.port) == f.port) else {
-            return Err(format!("no forwarding open on port {}", f.port));
+            return Err(Refusal::NotOpen(f.port));
         };
         it.forwarder
             .forward(
@@ -166,7 +220,11 @@ impl State {
                 &sender,
                 ServiceClass::RELIABLE,
             )
-            .map_err(|e| format!("cannot forward {type_name:?} of {sender:?}: {e}"))?;
+            .map_err(|error| Refusal::CannotForward {
+                type_name: type_name.clone(),
+                sender: sender.clone(),
+                error,
+            })?;
         Ok(format!(
             "forwarding {type_name:?} of {sender:?} on port {}",
             it.port
@@ -203,7 +261,7 @@ impl ForwarderServer {
             let st = s.borrow();
             match outcome {
                 Ok(port) => st.notice(Severity::Info, format!("forwarding port {port} open")),
-                Err(e) => st.notice(Severity::Warning, e),
+                Err(e) => st.notice(Severity::Warning, e.to_string()),
             }
         });
         let s: Weak<RefCell<State>> = Rc::downgrade(&state);
@@ -215,7 +273,7 @@ impl ForwarderServer {
             let st = s.borrow();
             match outcome {
                 Ok(text) => st.notice(Severity::Info, text),
-                Err(e) => st.notice(Severity::Warning, e),
+                Err(e) => st.notice(Severity::Warning, e.to_string()),
             }
         });
         Ok(ForwarderServer { state })

@@ -68,14 +68,41 @@ fn leaf(p: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// Why a log folder cannot be used.
+#[derive(Debug)]
+pub enum FolderError {
+    /// The path is not a folder.
+    NotAFolder(PathBuf),
+    /// The path cannot be read (no such folder, permissions).
+    Io(PathBuf, std::io::Error),
+}
+
+impl fmt::Display for FolderError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FolderError::NotAFolder(p) => write!(f, "{}: not a folder", p.display()),
+            FolderError::Io(p, e) => write!(f, "{}: {e}", p.display()),
+        }
+    }
+}
+
+impl std::error::Error for FolderError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            FolderError::Io(_, e) => Some(e),
+            FolderError::NotAFolder(_) => None,
+        }
+    }
+}
+
 impl LogFolder {
     /// A folder for peers' logs; it must exist and be a folder.
-    pub fn new(dir: impl Into<PathBuf>) -> Result<LogFolder, String> {
+    pub fn new(dir: impl Into<PathBuf>) -> Result<LogFolder, FolderError> {
         let dir = dir.into();
         match std::fs::metadata(&dir) {
             Ok(m) if m.is_dir() => Ok(LogFolder { dir }),
-            Ok(_) => Err(format!("{}: not a folder", dir.display())),
-            Err(e) => Err(format!("{}: {e}", dir.display())),
+            Ok(_) => Err(FolderError::NotAFolder(dir)),
+            Err(e) => Err(FolderError::Io(dir, e)),
         }
     }
 

@@ -34,7 +34,7 @@ pub mod replay;
 pub mod tools;
 pub mod writer;
 
-pub use folder::{LogFolder, Refusal};
+pub use folder::{FolderError, LogFolder, Refusal};
 pub use format::{
     decode_entry, encode_entry, entry_len, EntryFault, EntryHeader, EntryProblem, EntryWalker,
     LogEntry, SystemEntry, ENTRY_HEADER_LEN, MAX_ENTRY_PAYLOAD,

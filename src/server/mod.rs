@@ -8,5 +8,5 @@ pub mod options;
 pub mod run;
 
 pub use factory::{build_devices, build_devices_in, BuildError, BuildNote};
-pub use options::{parse_args, ServerCommand, ServerOptions, SleepPolicy};
+pub use options::{parse_args, OptionError, ServerCommand, ServerOptions, SleepPolicy};
 pub use run::{raise_descriptor_limit, ServerLoop};

@@ -142,16 +142,46 @@ pub const USAGE: &str = "usage: vrpn_server [-f FILE] [-warn] [-v] [-quiet] [-q]
   -h, --help      print this help
   --version       print the version";
 
-/// Parses arguments (without the program name). `Err` carries a one-line message for the user.
-pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerCommand, String> {
+/// A command-line problem; displays as a one-line message for the user.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum OptionError {
+    /// An option that takes a value came last.
+    MissingValue(&'static str),
+    /// An option's value is not what it must be: the option, the value, what was expected.
+    BadValue(&'static str, String, &'static str),
+    /// An option this program does not have.
+    Unknown(String),
+    /// A second port, or any other word that is not an option.
+    Unexpected(String),
+}
+
+impl std::fmt::Display for OptionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OptionError::MissingValue(flag) => {
+                write!(f, "{flag} needs a value (see vrpn_server -h)")
+            }
+            OptionError::BadValue(flag, v, expected) => {
+                write!(f, "{flag} {v:?}: expected {expected}")
+            }
+            OptionError::Unknown(s) => write!(f, "unknown option {s} (see vrpn_server -h)"),
+            OptionError::Unexpected(s) => {
+                write!(f, "unexpected argument {s:?} (see vrpn_server -h)")
+            }
+        }
+    }
+}
+
+impl std::error::Error for OptionError {}
+
+/// Parses arguments (without the program name).
+pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerCommand, OptionError> {
     let mut o = ServerOptions::default();
     let mut it = args.into_iter();
     let mut port_seen = false;
     while let Some(a) = it.next() {
-        let mut value = |flag: &str| {
-            it.next()
-                .ok_or_else(|| format!("{flag} needs a value (see vrpn_server -h)"))
-        };
+        let mut value = |flag: &'static str| it.next().ok_or(OptionError::MissingValue(flag));
         match a.as_str() {
             "-f" => o.config = value("-f")?,
             "-warn" => o.warn_only = true,
@@ -161,7 +191,7 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-forwardports" => {
                 let v = value("-forwardports")?;
                 o.forward_ports = Some(parse_port_range(&v).ok_or_else(|| {
-                    format!("-forwardports {v:?}: expected a port or a range LOW-HIGH")
+                    OptionError::BadValue("-forwardports", v.clone(), "a port or a range LOW-HIGH")
                 })?);
             }
             "-q" => o.quit_after_last = true,
@@ -173,7 +203,9 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
                     .parse()
                     .ok()
                     .filter(|s: &f64| s.is_finite())
-                    .ok_or_else(|| format!("-clockshift {v:?}: expected a number of seconds"))?;
+                    .ok_or_else(|| {
+                        OptionError::BadValue("-clockshift", v.clone(), "a number of seconds")
+                    })?;
                 o.clock_shift = Some(s);
             }
             "-devroot" => o.device_root = Some(value("-devroot")?),
@@ -183,14 +215,18 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             "-NIC" => {
                 let v = value("-NIC")?;
                 o.nic = Some(v.parse().map_err(|_| {
-                    format!("-NIC {v:?}: expected the IPv4 address of a local interface")
+                    OptionError::BadValue(
+                        "-NIC",
+                        v.clone(),
+                        "the IPv4 address of a local interface",
+                    )
                 })?);
             }
             "-millisleep" => {
                 let v = value("-millisleep")?;
-                let n: i64 = v
-                    .parse()
-                    .map_err(|_| format!("-millisleep {v:?}: expected a whole number"))?;
+                let n: i64 = v.parse().map_err(|_| {
+                    OptionError::BadValue("-millisleep", v.clone(), "a whole number")
+                })?;
                 o.sleep = if n <= 0 {
                     SleepPolicy::Spin
                 } else {
@@ -202,17 +238,15 @@ pub fn parse_args<I: IntoIterator<Item = String>>(args: I) -> Result<ServerComma
             }
             "-h" | "--help" | "-help" => return Ok(ServerCommand::Help),
             "--version" => return Ok(ServerCommand::Version),
-            s if s.starts_with('-') => {
-                return Err(format!("unknown option {s} (see vrpn_server -h)"))
-            }
+            s if s.starts_with('-') => return Err(OptionError::Unknown(s.to_owned())),
             s => {
                 if port_seen {
-                    return Err(format!("unexpected argument {s:?} (see vrpn_server -h)"));
+                    return Err(OptionError::Unexpected(s.to_owned()));
                 }
                 port_seen = true;
-                o.port = s
-                    .parse()
-                    .map_err(|_| format!("port {s:?}: expected a number from 0 to 65535"))?;
+                o.port = s.parse().map_err(|_| {
+                    OptionError::BadValue("port", s.to_owned(), "a number from 0 to 65535")
+                })?;
             }
         }
     }
@@ -279,12 +313,19 @@ mod tests {
 
     #[test]
     fn clear_errors() {
-        assert!(parse_args(args("-NIC eth0")).unwrap_err().contains("IPv4"));
+        assert!(parse_args(args("-NIC eth0"))
+            .unwrap_err()
+            .to_string()
+            .contains("IPv4"));
         assert!(parse_args(args("-f"))
             .unwrap_err()
+            .to_string()
             .contains("needs a value"));
-        assert!(parse_args(args("abc")).unwrap_err().contains("port"));
-        let e = parse_args(args("-bogus")).unwrap_err();
+        assert!(parse_args(args("abc"))
+            .unwrap_err()
+            .to_string()
+            .contains("port"));
+        let e = parse_args(args("-bogus")).unwrap_err().to_string();
         assert_eq!(e, "unknown option -bogus (see vrpn_server -h)");
         assert!(!e.contains('\n'));
     }

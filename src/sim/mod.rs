@@ -8,17 +8,21 @@
 //! * [`PtyDevice`]: a model on a real pseudo-terminal, which a driver opens like hardware;
 //!   [`SimulatedDevice`] steps one in its own thread, with garbage between records, silence
 //!   and unplugging on demand.
+//! * [`Simulator`]: a simulator as the `vrpn_device_sim` program runs it (each driver's
+//!   `sim.rs` exports one; the list is `crate::drivers::SIMULATORS`).
 //! * [`rig`]: a `vrpn_server` child process on a configuration line and a TCP client that
 //!   records everything it receives, for the end-to-end tests every driver has (exact values
 //!   through a real server to a real client, garbage, silence, unplugging).
 //!
 //! docs/DRIVERS.md ("Adding a driver") shows them together.
 
+mod catalog;
 mod line;
 mod pty;
 pub mod rig;
 mod thread;
 
+pub use catalog::Simulator;
 pub use line::{DeviceModel, Rng, VirtualLine, VirtualLines};
 pub use pty::{PtyDevice, Written};
 pub use thread::{Noisy, SimulatedDevice};

@@ -99,12 +99,14 @@ type Job<M> = Box<dyn FnOnce(&mut [PtyDevice<Noisy<M>>]) + Send>;
 /// names.
 ///
 /// ```no_run
-/// # use vrpn::sim::SimulatedDevice;
-/// # use vrpn::drivers::dyna::sim::{DynaSim, SimConfig};
-/// let sim = SimulatedDevice::start("dyna", || DynaSim::new(SimConfig::new(19200))).unwrap();
-/// let line = format!("vrpn_Tracker_Dyna Dyna0 1 {} 19200\n", sim.path().display());
+/// # use vrpn::sim::{DeviceModel, SimulatedDevice};
+/// # fn example<M: DeviceModel + Send + 'static>(my_model: fn() -> M, sent: fn(&M) -> usize) {
+/// // `my_model` builds the device's simulator (a driver's `sim.rs`).
+/// let sim = SimulatedDevice::start("mydevice", my_model).unwrap();
+/// let line = format!("vrpn_MyDevice Device0 {} 19200\n", sim.path().display());
 /// sim.set_mute(true); // silence: the driver's watchdog must notice
-/// let sent = sim.model(|m| m.sent().len()); // what the device has sent so far
+/// let count = sim.model(move |m| sent(m)); // what the device has sent so far
+/// # }
 /// ```
 pub struct SimulatedDevice<M: DeviceModel + 'static> {
     jobs: mpsc::Sender<Job<M>>,

@@ -11,9 +11,10 @@ use super::record::{is900_offset, joystick_raw, METRES_PER_INCH};
 use super::reset::{BREAK_GAP, QUIET};
 use super::sim::{self, FastrakSim, SentRecord, SimConfig};
 use super::stations::clip;
-use super::{FastrakDriver, WATCHDOG};
+use super::FastrakProtocol;
 use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
 use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::{Lifecycle, Supervision};
 use crate::serial::{PortKind, PortSettings, SerialDriver};
 use crate::server::config::parse_one;
 use crate::sim::VirtualLine;
@@ -21,7 +22,13 @@ use crate::{
     AnalogRemote, ButtonRemote, Connection, Now, SenderFilter, TimeVal, TrackerPose, TrackerRemote,
 };
 
-type Line = VirtualLine<FastrakDriver, FastrakSim>;
+type Line = VirtualLine<Lifecycle<FastrakProtocol>, FastrakSim>;
+
+/// The watchdog every tracker has.
+const WATCHDOG: Duration = match Supervision::TRACKER.watchdog {
+    Some(d) => d,
+    None => Duration::ZERO,
+};
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 
 /// What a client saw, in arrival order across devices.
@@ -53,7 +60,7 @@ const START_WALL: TimeVal = TimeVal {
 /// A rig for the driver `make` builds, with remotes for the station devices `devices`
 /// (names leaked to `'static` for the event log; tests only).
 fn rig_with(
-    make: impl FnOnce(&Connection) -> FastrakDriver,
+    make: impl FnOnce(&Connection) -> Lifecycle<FastrakProtocol>,
     devices: &[&str],
     sim: SimConfig,
     seed: u64,
@@ -112,12 +119,7 @@ fn rig_with(
 
 fn rig(cfg_text: &str, devices: &[&str], sim: SimConfig, seed: u64) -> Rig {
     let cfg = fastrak_cfg(cfg_text);
-    rig_with(
-        |conn| FastrakDriver::new(&cfg, conn).unwrap(),
-        devices,
-        sim,
-        seed,
-    )
+    rig_with(|conn| cfg.lifecycle(conn).unwrap(), devices, sim, seed)
 }
 
 impl Rig {
@@ -258,11 +260,11 @@ const PLAIN: &str = "vrpn_Tracker_Fastrak Fastrak0 /dev/ttyS0 19200\n";
 fn serves_the_port_and_names_of_its_entry() {
     let cfg = fastrak_cfg(PLAIN);
     let conn = Connection::new_loopback();
-    let d = FastrakDriver::new(&cfg, &conn).unwrap();
+    let d = cfg.lifecycle(&conn).unwrap();
     assert_eq!(d.name(), "Fastrak0");
-    assert_eq!(d.port(), "/dev/ttyS0");
+    assert_eq!(d.protocol().port(), "/dev/ttyS0");
     assert_eq!(d.port_kind(), PortKind::Serial(PortSettings::n81(19200)));
-    assert_eq!(d.tracker().num_sensors(), 4);
+    assert_eq!(d.protocol().tracker().num_sensors(), 4);
     assert!(
         d.next_deadline().is_none(),
         "nothing happens before the port opens"
@@ -310,7 +312,7 @@ fn reset_reaches_streaming_in_half_a_second() {
         assert!(rig.has_text(sev, text), "missing text {text:?}");
     }
     assert_eq!(rig.line.opens, 1);
-    assert_eq!(rig.line.driver.reset_attempts(), 0);
+    assert_eq!(rig.line.driver.protocol().reset_attempts(), 0);
 }
 
 #[test]
@@ -335,8 +337,8 @@ fn streamed_values_arrive_exactly_and_in_order() {
         .map(|p| p.sensor as i32)
         .collect();
     assert_eq!(sensors, [0, 1, 2, 3, 0, 1, 2, 3]);
-    assert_eq!(rig.line.driver.skipped_bytes(), 0);
-    assert_eq!(rig.line.driver.records() as usize, n);
+    assert_eq!(rig.line.driver.protocol().skipped_bytes(), 0);
+    assert_eq!(rig.line.driver.stats().records as usize, n);
 }
 
 #[test]
@@ -388,7 +390,7 @@ fn garbage_between_records_loses_nothing() {
     rig.line.run_for(Duration::from_millis(500));
     let n = assert_exact_stream(&rig);
     assert!(n >= 24 * 4);
-    assert!(rig.line.driver.skipped_bytes() >= 24);
+    assert!(rig.line.driver.protocol().skipped_bytes() >= 24);
     assert!(rig.has_text(TextSeverity::Normal, "While syncing (looking for '0', got"));
     assert!(rig.has_text(TextSeverity::Normal, "Bad sensor # (4) in record"));
     assert!(rig.has_text(TextSeverity::Normal, "Bad 3rd char in record"));
@@ -468,7 +470,7 @@ fn silent_tracker_trips_the_watchdog_and_resumes_after_a_new_reset() {
         "resumed {back:?} after waking"
     );
     assert!(rig.line.driver.is_streaming());
-    assert_eq!(rig.line.driver.reset_attempts(), 0);
+    assert_eq!(rig.line.driver.protocol().reset_attempts(), 0);
     // The watchdog fired 2 s after the first byte of the last good record, not earlier.
     let last_good = rig.poses()[before - 1].time;
     let reopen = rig
@@ -536,7 +538,7 @@ fn reset_escalates_through_ctrl_y_until_the_tracker_answers() {
     assert_eq!(rig.line.device.reboots(), 1);
     assert!(rig.has_text(TextSeverity::Warning, "Resetting the tracker (attempt 3)"));
     assert!(!rig.has_text(TextSeverity::Warning, "Resetting the tracker (attempt 4)"));
-    assert_eq!(rig.line.driver.reset_attempts(), 0);
+    assert_eq!(rig.line.driver.protocol().reset_attempts(), 0);
     // Attempts 1 and 2 time out (1.157 s and 1.257 s); attempt 3's probes go unanswered
     // during the 1.5 s reboot and once after it, then succeed: no fixed 20 s wait.
     assert!(
@@ -606,3 +608,67 @@ const IS900: &str = "vrpn_Tracker_Fastrak Isense900 /dev/ttyS1 115200 IS900time 
                      Stylus Stylus0 2\n";
 
 mod stations;
+
+#[test]
+fn a_reset_never_invents_data() {
+    let mut rig = rig(IS900, &["Wand0", "Stylus0"], SimConfig::new(115_200), 23);
+    rig.start_up();
+    rig.line.run_for(Duration::from_millis(500));
+    let (poses, events) = (rig.pose_count(), rig.seen.borrow().len());
+    rig.line.device.set_silent(true);
+    rig.line.run_for(WATCHDOG + Duration::from_secs(3));
+    assert!(rig.line.opens >= 2, "the watchdog reopened the port");
+    // Nothing reported while the tracker is silent: no pose, no button, no channel.
+    assert_eq!(rig.seen.borrow().len(), events);
+    rig.line.device.set_silent(false);
+    let woke = rig.line.now().mono;
+    assert!(rig.run_until_poses(poses + 40, Duration::from_secs(10)));
+    // Every pose after the reset is a record the tracker sent after waking, in order (the
+    // times are the tracker's own clock: compared apart).
+    let after: Vec<SentRecord> = rig
+        .binary_log()
+        .into_iter()
+        .filter(|r| r.first_byte_at >= woke)
+        .collect();
+    let zero = rig.line.driver.protocol().clock_zero().unwrap();
+    let mut next = 0;
+    for p in &rig.poses()[poses..] {
+        let at = after[next..]
+            .iter()
+            .position(|r| {
+                let t =
+                    TimeVal::from_micros(zero.as_micros() + is900_offset(r.device_ms).as_micros());
+                expected_pose(r, t) == actual(p)
+            })
+            .unwrap_or_else(|| panic!("pose {p:?} was never sent"));
+        next += at + 1;
+    }
+    // And the buttons and channels after it are the records' (no release at the reset).
+    let later: Vec<Seen> = rig.seen.borrow()[events..].to_vec();
+    assert!(later.iter().any(|s| matches!(s, Seen::Pose(_))));
+    for s in &later {
+        if let Seen::Button(_, _, _, t) | Seen::Analog(_, _, t) = s {
+            assert!(rig.poses()[poses..].iter().any(|p| p.time == *t), "{s:?}");
+        }
+    }
+}
+
+#[test]
+fn the_is900_keyword_is_explained_and_odd_continuations_never_panic() {
+    // C++ has no vrpn_Tracker_IS900: the unknown-keyword error says what to write instead.
+    let entries =
+        crate::server::config::parse_str("vrpn_Tracker_IS900 T0 /dev/ttyUSB0 115200\n", "x")
+            .unwrap();
+    let error = entries[0]
+        .unknown_error()
+        .expect("an unknown keyword")
+        .to_string();
+    assert!(error.contains("IS900time"), "{error}");
+    for text in [
+        "vrpn_Tracker_Fastrak\\",
+        "vrpn_Tracker_Fastrak a b 9600 \\",
+        "vrpn_Tracker_Fastrak a b 9600 /\n/\n",
+    ] {
+        let _ = crate::server::config::parse_str_lenient(text, "x");
+    }
+}

@@ -42,6 +42,7 @@ fn is900_wand_and_stylus_report_under_their_own_names_with_tracker_time() {
     let zero = rig
         .line
         .driver
+        .protocol()
         .clock_zero()
         .expect("IS900time zeroes the clock");
     // The tracker clock was zeroed when MZ reached it; the host estimate adds the 7 bytes'
@@ -183,18 +184,21 @@ fn intersense_entry_runs_eight_stations_over_the_fastrak_protocol() {
     sim.stations = 8;
     sim.cycle = Duration::from_millis(30);
     let mut rig = rig_with(
-        |conn| FastrakDriver::from_intersense(&cfg, "/dev/ttyUSB3", 115_200, conn).unwrap(),
+        |conn| {
+            let p = FastrakProtocol::from_intersense(&cfg, "/dev/ttyUSB3", 115_200, conn);
+            Lifecycle::new(&cfg.name, p.unwrap(), conn)
+        },
         &["Wand6"],
         sim,
         15,
     );
-    assert_eq!(rig.line.driver.port(), "/dev/ttyUSB3");
-    assert_eq!(rig.line.driver.tracker().num_sensors(), 8);
+    assert_eq!(rig.line.driver.protocol().port(), "/dev/ttyUSB3");
+    assert_eq!(rig.line.driver.protocol().tracker().num_sensors(), 8);
     rig.start_up();
     rig.line.run_for(Duration::from_secs(1));
     assert_eq!(rig.line.device.output_list(7), [2, 11, 21, 22, 23, 0]);
     assert_eq!(rig.line.device.output_list(8), [2, 11, 21, 0]);
-    let zero = rig.line.driver.clock_zero().unwrap();
+    let zero = rig.line.driver.protocol().clock_zero().unwrap();
     let log = rig.binary_log();
     let poses = rig.poses();
     assert!(poses.len() > 200);
@@ -251,7 +255,7 @@ fn station_devices_must_be_on_existing_stations() {
         }],
     };
     let conn = Connection::new_loopback();
-    assert!(FastrakDriver::new(&cfg, &conn).is_err());
+    assert!(FastrakProtocol::new(&cfg, &conn).is_err());
 }
 
 #[test]
@@ -280,7 +284,7 @@ fn reset_commands_then_station_devices_with_is900_time() {
     let d = &rig.line.device;
     assert!(d.commands.iter().any(|c| c == "MCc"));
     assert_eq!(d.output_list(4), [2, 11, 21, 22, 0]);
-    let zero = rig.line.driver.clock_zero().unwrap();
+    let zero = rig.line.driver.protocol().clock_zero().unwrap();
     let time_of = |r: &SentRecord| {
         TimeVal::from_micros(zero.as_micros() + is900_offset(r.device_ms).as_micros())
     };
@@ -343,4 +347,49 @@ fn a_wand_beside_a_fastrak_stylus_uses_the_stylus_button_format() {
         .borrow()
         .iter()
         .any(|s| matches!(s, Seen::Analog("W", ..))));
+}
+
+#[test]
+fn is900_times_that_are_not_times_are_counted_and_stamped_with_the_arrival() {
+    let mut sim = SimConfig::new(115_200);
+    sim.stations = 2;
+    let mut rig = rig(
+        "vrpn_Tracker_Fastrak T /dev/ttyS1 115200 IS900time\n",
+        &[],
+        sim,
+        21,
+    );
+    rig.start_up();
+    rig.line.run_for(Duration::from_millis(200));
+    let zero = rig.line.driver.protocol().clock_zero().unwrap();
+    let hostile = [
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        3.4e38,
+        -3.4e38,
+        -5.0,
+        super::super::MAX_DEVICE_MS * 2.0,
+    ];
+    rig.line.device.hostile_times.extend(hostile);
+    rig.line.run_for(Duration::from_millis(500));
+    let log = rig.binary_log();
+    let poses = rig.poses();
+    assert!(poses.len() > 60);
+    let mut bad = 0;
+    for (p, r) in poses.iter().zip(&log) {
+        let ms = r.device_ms;
+        let want = if ms.is_finite() && (0.0..=super::super::MAX_DEVICE_MS).contains(&ms) {
+            TimeVal::from_micros(zero.as_micros() + is900_offset(ms).as_micros())
+        } else {
+            bad += 1;
+            rig.arrival(r)
+        };
+        assert_eq!(actual(p), expected_pose(r, want), "device time {ms}");
+    }
+    assert_eq!(bad, hostile.len(), "every hostile time was delivered");
+    assert_eq!(rig.line.driver.protocol().bad_times(), hostile.len() as u64);
+    assert!(rig.has_text(TextSeverity::Warning, "is not a time since the reset"));
+    // The stream goes on: no reset, no lost record.
+    assert_eq!(rig.line.driver.stats().resets, 1);
 }

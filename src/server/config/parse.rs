@@ -136,9 +136,9 @@ mod tests {
     fn no_panic_on_odd_bytes() {
         for text in [
             "\u{0}\u{0}\u{0}\n",
-            "vrpn_Tracker_Fastrak\\",
-            "vrpn_Tracker_Fastrak a b 9600 \\",
-            "vrpn_Tracker_Fastrak a b 9600 /\n/\n",
+            "vrpn_Tracker_NULL\\",
+            "vrpn_Tracker_NULL a 1 60 \\",
+            "vrpn_Tracker_NULL a 1 60 /\n/\n",
             "vrpn_Tracker_AnalogFly a 1 absolute",
             "vrpn_Tracker_ButtonFly a 1\n\n",
             "\u{feff}\u{feff}\u{feff}",

@@ -154,7 +154,7 @@ mod tests {
 
     #[test]
     fn golden_joylin_channels() {
-        // button_analog_dial: vrpn_Joylin, two axes, over UDP.
+        // button_analog_dial: a joystick driver's two axes, over UDP.
         let p = hex("4000000000000000bfddd1bba37746efbfd194232846508d");
         let c = Channels::decode(&p).unwrap();
         assert_eq!(c.as_slice(), &[-0.46592608417004916, -0.27466658528397475]);

@@ -202,7 +202,7 @@ mod tests {
 
     #[test]
     fn golden_joystick_error() {
-        // text_and_ping: vrpn_Joylin's error text; the tail after the NUL is stack garbage.
+        // text_and_ping: a joystick driver's error text; the tail after the NUL is stack garbage.
         let mut p = hex(
             "00000002000000004572726f722072656164696e672066726f6d206a6f79737469636b00\
              00000000d0c3f717fe7f00000600000001000000693f026b00000000",

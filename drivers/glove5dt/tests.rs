@@ -1,0 +1,230 @@
+//! The 5DT glove driver against its simulator on a virtual serial line, with an Analog remote
+//! on one in-process connection: the reset, exact values and stamps in every mode, garbage,
+//! the watchdog, wrong answers, the configuration line.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use super::config::{Glove5dt, Mode};
+use super::sim::{GloveSim, SimConfig};
+use super::Glove5dtProtocol;
+use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
+use crate::devices::text::{decode_text, TextSeverity};
+use crate::driver::Lifecycle;
+use crate::server::config::{parse_one, parse_str};
+use crate::server::{build_devices, BuildNote};
+use crate::sim::VirtualLine;
+use crate::{AnalogRemote, Connection, Now, SenderFilter, TimeVal};
+
+type Heard = Rc<RefCell<Vec<(Vec<f64>, TimeVal)>>>;
+
+struct Rig {
+    line: VirtualLine<Lifecycle<Glove5dtProtocol>, GloveSim>,
+    start: Now,
+    heard: Heard,
+    texts: Rc<RefCell<Vec<String>>>,
+    _remote: AnalogRemote,
+    _conn: Connection,
+}
+
+fn rig(cfg_line: &str, seed: u64) -> Rig {
+    set_print_threshold(TextSeverity::Other(u32::MAX));
+    let cfg: Glove5dt = parse_one(cfg_line);
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let heard: Heard = Rc::default();
+    let remote = AnalogRemote::on_connection(&cfg.name, &conn).unwrap();
+    let h = heard.clone();
+    remote.on_report(move |a| {
+        h.borrow_mut()
+            .push((a.channel[..a.num_channel].to_vec(), a.time))
+    });
+    let texts: Rc<RefCell<Vec<String>>> = Rc::default();
+    let sender = conn.register_sender(&cfg.name).unwrap();
+    let text_type = conn.register_type(TEXT_MESSAGE).unwrap();
+    let t = texts.clone();
+    conn.register_handler(text_type, SenderFilter::Only(sender), move |m| {
+        if let Some((_, _, text)) = decode_text(m.payload) {
+            t.borrow_mut().push(text.to_owned());
+        }
+    });
+    let mut sim = SimConfig::new(cfg.baud);
+    sim.ten_bytes = cfg.ten_bytes;
+    sim.keep_log = true;
+    let start = Now {
+        mono: Instant::now(),
+        wall: TimeVal::new(1_700_000_000, 0),
+    };
+    Rig {
+        line: VirtualLine::new(driver, GloveSim::new(sim), start, seed),
+        start,
+        heard,
+        texts,
+        _remote: remote,
+        _conn: conn,
+    }
+}
+
+impl Rig {
+    fn run_until_reports(&mut self, n: usize, max: Duration) {
+        let h = self.heard.clone();
+        assert!(
+            self.line.run_until(max, |_| h.borrow().len() >= n),
+            "{} of {n} reports; texts {:?}",
+            self.heard.borrow().len(),
+            self.texts.borrow()
+        );
+    }
+
+    /// Reports from `from` on are a contiguous run of the records logged from `after` on,
+    /// each stamped with its first byte.
+    fn check(&self, from: usize, after: usize) {
+        let heard = self.heard.borrow();
+        let got = &heard[from..];
+        let sent = self.line.device.sent();
+        let start = (after..sent.len())
+            .find(|&i| sent[i].channels[..] == got[0].0[..])
+            .unwrap_or_else(|| panic!("first report {:?} never sent", got[0]));
+        for (i, (channels, time)) in got.iter().enumerate() {
+            let s = &sent[start + i];
+            assert_eq!(channels[..], s.channels[..], "report {i}");
+            let want = self.start.wall.plus(s.first_byte - self.start.mono);
+            let late = time.seconds_since(want);
+            assert!((0.0..0.002).contains(&late), "report {i}: {late} s late");
+        }
+    }
+
+    fn has_text(&self, part: &str) -> bool {
+        self.texts.borrow().iter().any(|t| t.contains(part))
+    }
+}
+
+#[test]
+fn polled_glove_is_reset_then_asked_for_each_record() {
+    let mut r = rig("vrpn_5dt glove 1 19200 1 0\n", 1);
+    r.line.split_reads = true;
+    r.run_until_reports(1, Duration::from_secs(1));
+    let startup = r.line.now().mono - r.start.mono;
+    assert!(startup < Duration::from_millis(50), "{startup:?}");
+    r.run_until_reports(100, Duration::from_secs(5));
+    r.check(0, 0);
+    let heard = r.line.device.heard();
+    assert_eq!(&heard[..3], b"AGC");
+    assert!(heard[3..].iter().all(|&b| b == b'C'));
+    assert!(heard.len() >= 100);
+    assert!(r.has_text("glove \"DG5 Glove\" version 2.1"));
+    assert!(r.has_text("A right glove is ready"));
+    assert!(r.has_text("Pitch and Roll are available"));
+}
+
+#[test]
+fn streaming_ten_byte_glove() {
+    let mut r = rig("vrpn_5dt glove 1 19200 2 1\n", 2);
+    r.line.split_reads = true;
+    r.run_until_reports(200, Duration::from_secs(5));
+    r.check(0, 0);
+    assert_eq!(r.line.device.heard(), b"AGD");
+}
+
+#[test]
+fn wireless_glove_is_only_listened_to() {
+    // 9600 baud: wireless, streaming ten-byte records whatever the line says.
+    let mut r = rig("vrpn_5dt glove 1 9600 1 0\n", 3);
+    r.line.split_reads = true;
+    r.run_until_reports(100, Duration::from_secs(5));
+    r.check(0, 0);
+    assert!(r.line.device.heard().is_empty());
+    assert!(r.has_text("receive-only 'wireless-type' glove"));
+    assert!(r.has_text("is ready and reporting"));
+}
+
+#[test]
+fn garbage_costs_no_record() {
+    for (line, seed) in [
+        ("vrpn_5dt glove 1 19200 2 0\n", 4),
+        ("vrpn_5dt glove 1 9600 2 1\n", 5),
+    ] {
+        let mut r = rig(line, seed);
+        r.run_until_reports(10, Duration::from_secs(5));
+        for junk in [&[1u8, 2, 3][..], &[0x55, 0x40], &[0xFF]] {
+            let n = r.heard.borrow().len();
+            r.run_until_reports(n + 1, Duration::from_secs(1));
+            let now = r.line.now().mono;
+            r.line.device.inject(junk, now);
+        }
+        let n = r.heard.borrow().len();
+        r.run_until_reports(n + 30, Duration::from_secs(5));
+        r.check(0, 0);
+        assert_eq!(r.line.driver.stats().skipped_bytes, 6);
+        assert!(r.has_text("skipped"), "{:?}", r.texts.borrow());
+    }
+}
+
+#[test]
+fn a_silent_glove_is_reset_on_the_open_port_and_resumes() {
+    for (line, seed, reset) in [
+        ("vrpn_5dt glove 1 19200 1 0\n", 6, &b"AGC"[..]),
+        ("vrpn_5dt glove 1 19200 2 0\n", 7, b"AGD"),
+    ] {
+        let mut r = rig(line, seed);
+        r.run_until_reports(10, Duration::from_secs(5));
+        r.line.device.mute = true;
+        r.line.run_for(Duration::from_millis(4500));
+        assert_eq!(r.line.driver.stats().watchdog_fired, 1);
+        assert!(r.has_text("Tracker failed, trying to reset"));
+        assert!(r.has_text("Unable to read from the glove"));
+        let (from, logged) = (r.heard.borrow().len(), r.line.device.sent().len());
+        r.line.device.mute = false;
+        r.run_until_reports(from + 20, Duration::from_secs(5));
+        r.check(from, logged);
+        assert_eq!(r.line.driver.stats().opens, 1, "reset on the open port");
+        let heard = r.line.device.heard();
+        assert!(heard.windows(3).filter(|w| *w == reset).count() >= 2);
+    }
+}
+
+#[test]
+fn a_wrong_answer_is_reported_and_retried() {
+    let mut r = rig("vrpn_5dt glove 1 19200 1 0\n", 8);
+    r.line.device.set_init_answer(Some(b'x'));
+    r.line.run_for(Duration::from_millis(2500));
+    assert!(r.heard.borrow().is_empty());
+    assert!(r.has_text("Unable to read from the glove"));
+    r.line.device.set_init_answer(Some(super::INIT_ANSWER));
+    r.run_until_reports(10, Duration::from_secs(5));
+    r.check(0, 0);
+}
+
+#[test]
+fn every_config_variant_builds_and_bad_lines_are_named() {
+    set_print_threshold(TextSeverity::Other(u32::MAX));
+    let text = "vrpn_5dt\tglove_5dt\t/dev/ttyS0\t19200\t1 0\n\
+                vrpn_5dt\tglove_5dt2\tCOM1\t19200\t1 0\n\
+                vrpn_5dt   glove_5dt_wireless /dev/ttyS1 9600 2 1\n";
+    let entries = parse_str(text, "5dt.cfg").unwrap();
+    let conn = Connection::new_loopback();
+    let mut names = Vec::new();
+    let devices = build_devices(&entries, &conn, false, None, |n| {
+        if let BuildNote::Opened { name, .. } = n {
+            names.push(name.to_string());
+        }
+    })
+    .unwrap();
+    assert_eq!(devices.len(), 3);
+    assert_eq!(names, ["glove_5dt", "glove_5dt2", "glove_5dt_wireless"]);
+    let w: Glove5dt = parse_one("vrpn_5dt g /dev/ttyS1 9600 1 0\n");
+    assert!(w.wireless() && w.record_len() == 10 && w.mode == Mode::Polled);
+    for (bad, why) in [
+        ("vrpn_5dt g /dev/ttyS0 19200 3 0\n", "mode"),
+        ("vrpn_5dt g /dev/ttyS0 19200 1\n", "ten_bytes"),
+        ("vrpn_5dt g /dev/ttyS0 12345 1 0\n", "12345"),
+    ] {
+        let e = parse_str(&format!("# comment\n{bad}"), "bad.cfg").unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("bad.cfg") && e.contains(":2") && e.contains(why),
+            "{e}"
+        );
+    }
+}
