@@ -43,10 +43,13 @@ pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod python;
+pub mod radamec;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
 pub mod threespace;
+pub mod tng3;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
@@ -104,7 +107,10 @@ pub static REGISTRY: &[&Driver] = &[
     &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
+    &python::DRIVER,
+    &radamec::DRIVER,
     &threespace::DRIVER,
+    &tng3::DRIVER,
     &uncjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).

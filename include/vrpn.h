@@ -28,6 +28,31 @@
 #define VRPN_NAME_CAPACITY 96
 
 /**
+ * Bytes of a channel's name and units, NUL included.
+ */
+#define VRPN_IMAGER_NAME_LEN 100
+
+/**
+ * Pixel type of a region: 8-bit (`vrpn_IMAGER_VALTYPE_UINT8`).
+ */
+#define VRPN_IMAGER_U8 1
+
+/**
+ * 16-bit.
+ */
+#define VRPN_IMAGER_U16 4
+
+/**
+ * 12-bit values in 16-bit words.
+ */
+#define VRPN_IMAGER_U12IN16 5
+
+/**
+ * 32-bit float.
+ */
+#define VRPN_IMAGER_F32 6
+
+/**
  * Capacity of `VrpnTextMessage::text`: the longest VRPN text (1023 bytes) and its NUL.
  */
 #define VRPN_TEXT_CAPACITY 1024
@@ -194,6 +219,11 @@ typedef struct VrpnDial VrpnDial;
 typedef struct VrpnDialServer VrpnDialServer;
 
 /**
+ * An imager remote.
+ */
+typedef struct VrpnImager VrpnImager;
+
+/**
  * A server connection (C++ `vrpn_Connection` made by `vrpn_create_server_connection`).
  */
 typedef struct VrpnServer VrpnServer;
@@ -324,6 +354,193 @@ typedef void (*VrpnTrackerAccelerationCallback)(void *userdata, const VrpnTracke
  * call only.
  */
 typedef void (*VrpnPeerSenderCallback)(void *userdata, const char *name);
+
+/**
+ * A region of one channel, valid during the callback only: `data` points into the received
+ * message.
+ */
+typedef struct {
+    /**
+     * The server's time stamp.
+     */
+    VrpnTimeVal time;
+    /**
+     * Channel index in the description.
+     */
+    int32_t channel;
+    /**
+     * First column.
+     */
+    uint16_t c_min;
+    /**
+     * Last column.
+     */
+    uint16_t c_max;
+    /**
+     * First row.
+     */
+    uint16_t r_min;
+    /**
+     * Last row.
+     */
+    uint16_t r_max;
+    /**
+     * First depth.
+     */
+    uint16_t d_min;
+    /**
+     * Last depth.
+     */
+    uint16_t d_max;
+    /**
+     * `VRPN_IMAGER_U8`, `_U16`, `_U12IN16` or `_F32`.
+     */
+    uint16_t value_type;
+    /**
+     * The pixels, little-endian, columns fastest, then rows, then depths.
+     */
+    const uint8_t *data;
+    /**
+     * Bytes at `data`.
+     */
+    size_t data_len;
+} VrpnImagerRegion;
+
+/**
+ * Receives regions; `region` and its data are valid during the call only.
+ */
+typedef void (*VrpnImagerRegionCallback)(void *userdata, const VrpnImagerRegion *region);
+
+/**
+ * The image's size and channel count.
+ */
+typedef struct {
+    /**
+     * The server's time stamp.
+     */
+    VrpnTimeVal time;
+    /**
+     * Columns.
+     */
+    int32_t cols;
+    /**
+     * Rows.
+     */
+    int32_t rows;
+    /**
+     * Depth.
+     */
+    int32_t depth;
+    /**
+     * Channels.
+     */
+    int32_t channels;
+} VrpnImagerDescription;
+
+/**
+ * Receives descriptions.
+ */
+typedef void (*VrpnImagerDescriptionCallback)(void *userdata, const VrpnImagerDescription *description);
+
+/**
+ * A begin-frame or end-frame.
+ */
+typedef struct {
+    /**
+     * The server's time stamp.
+     */
+    VrpnTimeVal time;
+    /**
+     * First column.
+     */
+    uint16_t c_min;
+    /**
+     * Last column.
+     */
+    uint16_t c_max;
+    /**
+     * First row.
+     */
+    uint16_t r_min;
+    /**
+     * Last row.
+     */
+    uint16_t r_max;
+    /**
+     * First depth.
+     */
+    uint16_t d_min;
+    /**
+     * Last depth.
+     */
+    uint16_t d_max;
+    /**
+     * Frames ended (or begun) so far, 1 for the first.
+     */
+    uint64_t seq;
+} VrpnImagerFrame;
+
+/**
+ * Receives frame ends.
+ */
+typedef void (*VrpnImagerFrameCallback)(void *userdata, const VrpnImagerFrame *frame);
+
+/**
+ * One channel of the description.
+ */
+typedef struct {
+    /**
+     * NUL-terminated name.
+     */
+    char name[VRPN_IMAGER_NAME_LEN];
+    /**
+     * NUL-terminated units.
+     */
+    char units[VRPN_IMAGER_NAME_LEN];
+    /**
+     * Smallest raw value.
+     */
+    float min_val;
+    /**
+     * Largest raw value.
+     */
+    float max_val;
+    /**
+     * Physical value = raw × scale + offset.
+     */
+    float scale;
+    /**
+     * Physical value = raw × scale + offset.
+     */
+    float offset;
+} VrpnImagerChannel;
+
+/**
+ * How the application's image is laid out, in elements of its type (see
+ * `BufferLayout` in docs/IMAGER.md).
+ */
+typedef struct {
+    /**
+     * Elements from one column to the next (1: packed).
+     */
+    size_t col_stride;
+    /**
+     * Elements from one row to the next.
+     */
+    size_t row_stride;
+    /**
+     * Elements from one depth to the next.
+     */
+    size_t depth_stride;
+    /**
+     * 0, or the rows of a buffer stored upside down.
+     */
+    uint16_t flip_rows;
+    /**
+     * Elements each value is written to (0 or 1: one).
+     */
+    size_t repeat;
+} VrpnImagerLayout;
 
 /**
  * One button changed.
@@ -644,6 +861,89 @@ VrpnStatus vrpn_connection_replay_length(const VrpnConnection *connection, doubl
  * `VRPN_STATUS_NO_DATA` (nothing written) for a log without messages.
  */
 VrpnStatus vrpn_connection_replay_start_time(const VrpnConnection *connection, VrpnTimeVal *time);
+
+/**
+ * Opens the imager `name` (`Device@host[:port]`); NULL on failure.
+ */
+VrpnImager *vrpn_imager_open(const char *name);
+
+/**
+ * Frees an imager remote (NULL is ignored).
+ */
+VrpnStatus vrpn_imager_free(VrpnImager *imager);
+
+/**
+ * Services the imager's connection without blocking; runs callbacks.
+ */
+VrpnStatus vrpn_imager_mainloop(VrpnImager *imager);
+
+/**
+ * The connection's state: a `VrpnConnectionState` (>= 0) or a negative `VrpnStatus`.
+ */
+int32_t vrpn_imager_connection_state(const VrpnImager *imager);
+
+/**
+ * Calls `callback(userdata, region)` for every region (once a description arrived).
+ */
+VrpnStatus vrpn_imager_on_region(VrpnImager *imager, VrpnImagerRegionCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Calls `callback(userdata, description)` for every description.
+ */
+VrpnStatus vrpn_imager_on_description(VrpnImager *imager, VrpnImagerDescriptionCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Calls `callback(userdata, frame)` at the end of every frame.
+ */
+VrpnStatus vrpn_imager_on_end_frame(VrpnImager *imager, VrpnImagerFrameCallback callback, void *userdata, uint64_t *id_out);
+
+/**
+ * Removes a callback by the id an `vrpn_imager_on_*` gave.
+ */
+VrpnStatus vrpn_imager_remove_callback(VrpnImager *imager, uint64_t id);
+
+/**
+ * Asks the server for at most `frames` more frames; negative lifts the limit.
+ */
+VrpnStatus vrpn_imager_throttle(VrpnImager *imager, int32_t frames);
+
+/**
+ * Copies the latest description into `*out` (`VRPN_STATUS_NO_DATA` before one arrived).
+ */
+VrpnStatus vrpn_imager_description(const VrpnImager *imager, VrpnImagerDescription *out);
+
+/**
+ * Copies channel `index` of the latest description into `*out` (`VRPN_STATUS_NO_DATA` when
+ * there is no such channel).
+ */
+VrpnStatus vrpn_imager_channel(const VrpnImager *imager, int32_t index, VrpnImagerChannel *out);
+
+/**
+ * Copies `region` (inside its callback) into the 8-bit image `image` of `len` elements laid
+ * out as `layout` says, converting the pixels. Every index is checked first: a region that
+ * does not fit is `VRPN_STATUS_INVALID_ARGUMENT` and nothing is written.
+ *
+ * # Safety
+ * `region` is the pointer a region callback received, used inside that callback; `image`
+ * points to `len` writable bytes; `layout` to a `VrpnImagerLayout`.
+ */
+VrpnStatus vrpn_imager_region_read_u8(const VrpnImagerRegion *region, uint8_t *image, size_t len, const VrpnImagerLayout *layout);
+
+/**
+ * As `vrpn_imager_region_read_u8` into a 16-bit image.
+ *
+ * # Safety
+ * As `vrpn_imager_region_read_u8`, with `len` writable `uint16_t`.
+ */
+VrpnStatus vrpn_imager_region_read_u16(const VrpnImagerRegion *region, uint16_t *image, size_t len, const VrpnImagerLayout *layout);
+
+/**
+ * As `vrpn_imager_region_read_u8` into a float image.
+ *
+ * # Safety
+ * As `vrpn_imager_region_read_u8`, with `len` writable `float`.
+ */
+VrpnStatus vrpn_imager_region_read_f32(const VrpnImagerRegion *region, float *image, size_t len, const VrpnImagerLayout *layout);
 
 /**
  * Opens the button device `name` (see `vrpn_tracker_open`); NULL on failure.

@@ -410,3 +410,59 @@ fn header_is_valid_cpp() {
     );
     run(&exe, &[]);
 }
+
+#[test]
+fn c_imager_client_reads_a_rust_imager_server() {
+    use vrpn::devices::imager::{BufferLayout, Extent, ImagerServer};
+    let scratch = Scratch::new("imager");
+    let exe = scratch.0.join("imager_client");
+    compile("examples/c/imager_client.c", &exe, Link::Shared);
+    let conn = vrpn::Connection::server(Some(std::net::Ipv4Addr::LOCALHOST), 0).unwrap();
+    conn.on_notice(|_| {});
+    let port = conn.local_port().unwrap();
+    let server = ImagerServer::new("Cam0", &conn, 32, 16, 1).unwrap();
+    server
+        .add_channel("gray", "counts", 0.0, 65535.0, 1.0, 0.0)
+        .unwrap();
+    let mut child = Command::new(&exe)
+        .args([&format!("Cam0@127.0.0.1:{port}"), "5", "20"])
+        .env_remove("LD_LIBRARY_PATH")
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // 16-bit pixels whose high byte is the column: the C client reads them as 8-bit.
+    let image: Vec<u16> = (0..32 * 16)
+        .map(|i| ((i % 32) as u16) << 8 | 0x7f)
+        .collect();
+    let whole = Extent::whole(32, 16, 1);
+    let layout = BufferLayout::packed(32, 16);
+    let start = std::time::Instant::now();
+    let mut next = start;
+    while child.try_wait().unwrap().is_none() {
+        assert!(start.elapsed() < std::time::Duration::from_secs(30));
+        conn.mainloop().unwrap();
+        if conn.connected() && std::time::Instant::now() >= next {
+            server.send_begin_frame(&whole, None).unwrap();
+            for r0 in [0u16, 8] {
+                let e = Extent::rect(0, 31, r0, r0 + 7);
+                server.send_region(0, &e, &image, &layout, None).unwrap();
+            }
+            server.send_end_frame(&whole, None).unwrap();
+            next += std::time::Duration::from_millis(20);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    let out = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("description 32x16x1 channels=1"), "{text}");
+    // Each row sums 0 + 1 + ... + 31 = 496, 16 rows.
+    let sums: Vec<&str> = text.lines().filter(|l| l.starts_with("frame ")).collect();
+    assert!(sums.len() >= 5, "{text}");
+    assert!(sums.iter().all(|l| l.contains("sum=7936")), "{text}");
+    assert!(
+        text.contains("channel 0 name=gray units=counts scale=1"),
+        "{text}"
+    );
+    assert!(text.contains("bad=0"), "{text}");
+}

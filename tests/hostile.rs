@@ -599,5 +599,7 @@ fn host_names_are_not_resolved_in_the_loop() {
     }
     let (p50, p99) = common::p50_p99(&mut rtts);
     eprintln!("pings while host names pour in: p50 {p50:.0} µs, p99 {p99:.0} µs");
-    assert!(p99 < 50_000.0, "a ping took {p99:.0} µs: the loop stalled");
+    // A name resolved in the loop stalls it for the resolver's time-outs (seconds for these
+    // names without a network); 250 ms leaves room for a loaded 2-core machine's scheduling.
+    assert!(p99 < 250_000.0, "a ping took {p99:.0} µs: the loop stalled");
 }

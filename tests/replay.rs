@@ -466,3 +466,59 @@ fn a_reset_inside_a_mainloop_callback_replays_from_the_start() {
     }
     assert_eq!(n.get(), 100 + 410);
 }
+
+/// Issue 29, item 10: a log of a client that reconnected 3,000 times (each session ends in a
+/// DISCONNECT entry and the next one describes the same names again) replays every pose. The
+/// same names described again after a DISCONNECT are not new names for the per-peer limit
+/// (`Limits::max_names_per_peer`, 2,000): replay used to stop after 1,999 sessions.
+#[test]
+fn a_log_of_many_sessions_replays_every_pose() {
+    use vrpn::log::LogWriter;
+    use vrpn::wire::payload::tracker::{PosQuat, POS_QUAT};
+    use vrpn::wire::{system, Cookie};
+    fn description(name: &str) -> Vec<u8> {
+        let mut p = ((name.len() + 1) as u32).to_be_bytes().to_vec();
+        p.extend_from_slice(name.as_bytes());
+        p.push(0);
+        p
+    }
+    const SESSIONS: usize = 3000;
+    let path = tmp("many_sessions.vrpn");
+    let _ = std::fs::remove_file(&path);
+    let mut w = LogWriter::create(&path, &Cookie::ours(0).to_bytes()).unwrap();
+    let start = vrpn::TimeVal {
+        sec: 1_700_000_000,
+        usec: 0,
+    };
+    let mut pose = [0u8; PosQuat::LEN];
+    for i in 0..SESSIONS {
+        let t = start.plus(Duration::from_millis(i as u64));
+        // Ids as a C++ writer would give them: the sender at 0, the pose type at 3.
+        w.log_message(system::SENDER_DESCRIPTION, 0, t, &description("Tracker0"))
+            .unwrap();
+        w.log_message(system::TYPE_DESCRIPTION, 3, t, &description(POS_QUAT))
+            .unwrap();
+        PosQuat::new(0, [i as f64, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]).encode(&mut pose);
+        w.log_message(3, 0, t, &pose).unwrap();
+        w.log_message(system::DISCONNECT, 0, t, &[]).unwrap();
+    }
+    w.finish().unwrap();
+
+    let conn = Connection::replay_file(&path).unwrap();
+    let notices = Rc::new(RefCell::new(Vec::new()));
+    let n = notices.clone();
+    conn.on_notice(move |notice| n.borrow_mut().push(notice.to_string()));
+    let tracker = TrackerRemote::on_connection("Tracker0", &conn).unwrap();
+    let xs = Rc::new(RefCell::new(Vec::new()));
+    let x = xs.clone();
+    tracker.on_pose(move |p| x.borrow_mut().push(p.pos.x as usize));
+    let r = conn.replay().unwrap();
+    r.set_rate(0.0);
+    r.play_to_time(f64::INFINITY);
+    let first: Vec<String> = notices.borrow().iter().take(2).cloned().collect();
+    assert!(r.eof(), "not at the end; notices {first:?}");
+    let xs = xs.borrow();
+    assert_eq!(xs.len(), SESSIONS, "poses replayed; notices {first:?}");
+    assert!(xs.iter().copied().eq(0..SESSIONS), "out of order");
+    let _ = std::fs::remove_file(&path);
+}

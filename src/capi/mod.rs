@@ -33,6 +33,7 @@
 pub mod client;
 pub mod connection;
 mod handle;
+pub mod imager;
 pub mod remotes;
 pub mod server;
 pub mod text;

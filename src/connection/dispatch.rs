@@ -45,6 +45,8 @@ pub struct Message<'a> {
     /// Read from a peer (or a replayed log), rather than packed on this side or raised by the
     /// connection itself.
     pub(crate) from_peer: bool,
+    /// The peer it came from (`None`: packed here, raised here, replayed, or queued).
+    pub(crate) peer: Option<crate::proto::PeerId>,
 }
 
 impl<'a> Message<'a> {
@@ -61,6 +63,28 @@ impl<'a> Message<'a> {
     #[inline]
     pub fn from_peer(&self) -> bool {
         self.from_peer
+    }
+
+    /// Answers this message: the reply goes to the peer that sent it only (to every peer and
+    /// local handler, as [`Connection::pack_message`], when the message did not come from a
+    /// peer). A request flood then costs the requester, never its neighbours.
+    pub fn reply(
+        &self,
+        time: TimeVal,
+        type_id: TypeId,
+        sender: SenderId,
+        payload: &[u8],
+        class_of_service: impl Into<super::ServiceClass>,
+    ) -> Result<(), crate::error::Error> {
+        match self.peer {
+            Some(peer) => {
+                self.conn
+                    .pack_to_peer(peer, time, type_id, sender, payload, class_of_service)
+            }
+            None => self
+                .conn
+                .pack_message(time, type_id, sender, payload, class_of_service),
+        }
     }
 
     /// When the message arrived here, on the local clock: the time of the `mainloop()` pass
@@ -334,6 +358,7 @@ mod tests {
             payload: &[],
             conn: &conn,
             from_peer: true,
+            peer: None,
         };
         t.dispatch(&msg(1));
         t.dispatch(&msg(2));

@@ -508,12 +508,38 @@ impl Connection {
                 payload,
                 conn: self,
                 from_peer: false,
+                peer: None,
             };
             if self.inner.depth.get() > 0 {
                 self.defer(&msg);
             } else {
                 self.deliver(&msg);
             }
+        }
+        Ok(())
+    }
+
+    /// Sends a message to the one peer `to` only (see [`Message::reply`]); nothing reaches
+    /// local handlers.
+    pub(crate) fn pack_to_peer(
+        &self,
+        to: crate::proto::PeerId,
+        time: TimeVal,
+        type_id: TypeId,
+        sender: SenderId,
+        payload: &[u8],
+        class_of_service: impl Into<ServiceClass>,
+    ) -> Result<(), Error> {
+        if payload.len() > MAX_PAYLOAD {
+            return Err(Error::PayloadTooLarge(payload.len()));
+        }
+        let mut core = self.inner.core.borrow_mut();
+        let class = class_of_service.into().bits();
+        if core
+            .session
+            .pack_to(to, time, sender.0, type_id.0, payload, class)
+        {
+            core.session.drop_backlogged(self.inner.clock.now());
         }
         Ok(())
     }
@@ -578,6 +604,7 @@ impl Connection {
                         payload: &scratch,
                         conn: self,
                         from_peer: false,
+                        peer: None,
                     });
                     self.inner.depth.set(0);
                     *self.inner.deferred_scratch.borrow_mut() = scratch;

@@ -95,7 +95,9 @@ impl Connection {
                     break None;
                 };
                 let scratch = match d {
-                    Some(Delivery::Message { .. }) => Some(session.take_scratch()),
+                    Some(Delivery::Message { .. }) => {
+                        Some((session.take_scratch(), session.delivering_from()))
+                    }
                     _ => None,
                 };
                 (d, scratch)
@@ -110,7 +112,7 @@ impl Connection {
                         type_id,
                         len,
                     }),
-                    Some(scratch),
+                    Some((scratch, peer)),
                 ) => {
                     self.deliver(&Message {
                         time,
@@ -120,6 +122,7 @@ impl Connection {
                         payload: &scratch[..len],
                         conn: self,
                         from_peer: true,
+                        peer,
                     });
                     self.inner
                         .core
@@ -150,6 +153,7 @@ impl Connection {
                     payload: &[],
                     conn: self,
                     from_peer: false,
+                    peer: None,
                 });
             }
             Delivery::Notice(n) => self.dispatch_notice(n),

@@ -98,7 +98,9 @@ pub struct Limits {
     /// with a notice. Default: the C++ receive limit (64008 padded bytes).
     pub max_message_payload: usize,
     /// Sender names, and separately type names, one peer may describe (C++: 2000 each); a peer
-    /// describing more is dropped with a notice. However many names peers describe, they can
+    /// describing more is dropped with a notice. What counts is a name new to this side or an
+    /// id bound again to another name; a known name described again for an unbound id (as
+    /// every session of a log does after a DISCONNECT entry) does not. However many names peers describe, they can
     /// never take the ids this side needs: names learned from peers are freed when the last
     /// peer that described them leaves, and when the table has no room left for a peer's new
     /// name, that name is ignored (its messages are not delivered), not fatal.

@@ -80,7 +80,7 @@ pub(crate) struct Slot {
 
 impl Slot {
     /// The callable, with its own reference (the slot may be emptied while it runs).
-    fn get(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+    pub(crate) fn get(&self, py: Python<'_>) -> Option<Py<PyAny>> {
         self.callable.borrow().as_ref().map(|f| f.clone_ref(py))
     }
 

@@ -14,6 +14,7 @@
 mod args;
 mod callbacks;
 mod errors;
+mod families;
 mod owned;
 mod remote;
 mod remotes;
@@ -56,6 +57,7 @@ fn vrpn_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     remote::add_classes(m)?;
     remotes::add_classes(m)?;
     server::add_classes(m)?;
+    families::add_classes(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -31,12 +31,19 @@ use crate::server::limits::{Claim, Interface, Published};
 use crate::Connection;
 
 /// Something the `Server` releases when it closes.
-trait Release {
+pub(crate) trait Release {
     fn release(&self);
 }
 
 /// A device server's Rust side, until its `close()` or its `Server`'s.
-struct Held<T>(RefCell<Option<Rc<T>>>);
+pub(crate) struct Held<T>(RefCell<Option<Rc<T>>>);
+
+impl<T> Held<T> {
+    /// The Rust side, until closed.
+    pub(crate) fn get(&self) -> Option<Rc<T>> {
+        self.0.borrow().clone()
+    }
+}
 
 impl<T> Release for Held<T> {
     fn release(&self) {
@@ -91,6 +98,24 @@ impl Server {
             .borrow()
             .clone()
             .ok_or_else(|| closed("Server"))
+    }
+
+    /// Makes an object on the server's connection that the server's `close()` releases with
+    /// it, without a device name claim (mutexes, shared objects: `src/python/families/`).
+    pub(crate) fn adopt<T: 'static>(
+        &self,
+        make: impl FnOnce(&Connection) -> Result<T, crate::Error>,
+    ) -> PyResult<Owned<Rc<Held<T>>>> {
+        let conn = self.conn()?;
+        let st = self.st()?;
+        let held = Rc::new(Held(RefCell::new(Some(Rc::new(
+            make(&conn).map_err(to_py)?,
+        )))));
+        let weak: Weak<dyn Release> = Rc::downgrade(&held) as Weak<dyn Release>;
+        let mut devices = st.devices.borrow_mut();
+        devices.retain(|d| d.strong_count() > 0);
+        devices.push(weak);
+        Ok(Owned::new(held))
     }
 
     /// Makes a device server of `kind` named `name` with `n` elements (already checked).
@@ -297,14 +322,14 @@ fn count_arg(obj: Option<&Bound<'_, PyAny>>, kind: Interface) -> PyResult<usize>
 }
 
 /// A device server's Rust side as its Python object reaches it.
-fn held<'a, T>(h: &'a Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<Rc<T>> {
+pub(crate) fn held<'a, T>(h: &'a Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<Rc<T>> {
     let h: &'a Rc<Held<T>> = h.get(class)?;
     let inner = h.0.borrow();
     inner.clone().ok_or_else(|| closed(class))
 }
 
 /// Closes a device server (its name is free again on the server).
-fn close_held<T>(h: &Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<()> {
+pub(crate) fn close_held<T>(h: &Owned<Rc<Held<T>>>, class: &'static str) -> PyResult<()> {
     h.get(class)?.release();
     Ok(())
 }

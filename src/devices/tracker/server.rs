@@ -83,7 +83,7 @@ impl TrackerServer {
                 quat: tf.to_room_quat,
             }
             .encode(&mut buf);
-            let _ = c.pack_message(now, ids.to_room, sender, &buf, class::RELIABLE);
+            let _ = m.reply(now, ids.to_room, sender, &buf, class::RELIABLE);
         });
         let (ts, tf) = (timestamp.clone(), transforms.clone());
         conn.register_handler(ids.request_unit_to_sensor, only, move |m| {
@@ -99,7 +99,7 @@ impl TrackerServer {
                     quat: *quat,
                 }
                 .encode(&mut buf);
-                let _ = c.pack_message(now, ids.unit_to_sensor, sender, &buf, class::RELIABLE);
+                let _ = m.reply(now, ids.unit_to_sensor, sender, &buf, class::RELIABLE);
             }
         });
         let (ts, tf) = (timestamp.clone(), transforms);
@@ -113,7 +113,7 @@ impl TrackerServer {
                 max: tf.workspace_max,
             }
             .encode(&mut buf);
-            let _ = c.pack_message(now, ids.workspace, sender, &buf, class::RELIABLE);
+            let _ = m.reply(now, ids.workspace, sender, &buf, class::RELIABLE);
         });
         Ok(TrackerServer {
             conn: conn.clone(),

@@ -147,6 +147,9 @@ pub struct Session {
     pub(crate) remote_log_request: Option<RemoteLogRequest>,
     /// Replay: a jump is under way; the user messages it passes over are not delivered.
     pub(crate) replay_skipping: bool,
+    /// The peer whose message [`poll_delivery`](Self::poll_delivery) returned last (`None`
+    /// for a delivery of another kind or from the queue): where a reply goes.
+    pub(crate) delivering_from: Option<PeerId>,
 }
 
 impl Session {
@@ -182,6 +185,7 @@ impl Session {
             clock_names_seen: false,
             remote_log_request: None,
             replay_skipping: false,
+            delivering_from: None,
         }
     }
 
@@ -400,6 +404,11 @@ impl Session {
             Kind::File(r) => Some(r),
             _ => None,
         }
+    }
+
+    /// The peer the message being delivered came from (see [`pack_to`](Self::pack_to)).
+    pub fn delivering_from(&self) -> Option<PeerId> {
+        self.delivering_from
     }
 
     /// The limits this session was made with.

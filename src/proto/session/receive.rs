@@ -35,6 +35,7 @@ impl Session {
     }
 
     fn poll_delivery_walk(&mut self, now: &dyn TimeSource) -> Option<Delivery> {
+        self.delivering_from = None;
         loop {
             if let Some(d) = self.queue.pop_front() {
                 return Some(d);
@@ -66,6 +67,7 @@ impl Session {
                 if d.is_some() {
                     self.cursor = i;
                     if let Some(p) = self.peers[i].as_ref() {
+                        self.delivering_from = Some(p.id);
                         // The only peer has nothing more buffered: the next poll need not walk
                         // (a pass that received one report would otherwise walk twice).
                         if n == 1 && p.input_drained() {
@@ -578,7 +580,11 @@ impl Session {
             &mut p.types
         };
         let already = table.get(name);
-        let rebinds = already.map_or(true, |l| remote.lookup(h.sender) != l);
+        // Counted: a name new here, or an id bound before and now bound to another name. A
+        // known name given to an unbound id (each session of a log after its DISCONNECT entry
+        // describes the same names again) costs nothing and is not counted.
+        let bound = remote.lookup(h.sender);
+        let rebinds = already.map_or(true, |l| bound >= 0 && bound != l);
         if rebinds {
             remote.described += 1;
             if remote.described > limits.max_names_per_peer {

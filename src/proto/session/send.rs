@@ -105,6 +105,46 @@ impl Session {
         self.backlogged.is_some()
     }
 
+    /// Queues a message to the one peer `to` (a reply to its request), logged as any packed
+    /// message. Returns what [`pack`](Self::pack) returns; a peer gone meanwhile gets nothing.
+    pub fn pack_to(
+        &mut self,
+        to: PeerId,
+        time: TimeVal,
+        sender: i32,
+        type_id: i32,
+        payload: &[u8],
+        class_of_service: u32,
+    ) -> bool {
+        if self.logs.any {
+            self.log_packed(type_id, sender, time, payload);
+        }
+        let Session {
+            peers,
+            backlogged,
+            queue,
+            ..
+        } = self;
+        let Some(p) = peers.get_mut(to.slot).and_then(|p| p.as_mut()) else {
+            return false;
+        };
+        if p.id != to {
+            return false;
+        }
+        match p.pack(time, sender, type_id, payload, class_of_service) {
+            Err(_) => {
+                if backlogged.is_none() {
+                    *backlogged = Some(p.id);
+                }
+            }
+            Ok(Channel::Discarded) if p.unreliable_dropped == 1 => {
+                falling_behind(queue, &p.label, p.tx.pending_len());
+            }
+            Ok(_) => {}
+        }
+        backlogged.is_some()
+    }
+
     fn pack_to_peers(
         &mut self,
         time: TimeVal,
