@@ -35,6 +35,12 @@
 //! | `cerealbox` | `vrpn_CerealBox Cereal0 PATH 19200 24 8 8` |
 //! | `dyna` | `vrpn_Tracker_Dyna Dyna0 1 PATH 19200` |
 //! | `joylin` | `vrpn_Joylin Joy0 PATH` |
+//! | `liberty` | `vrpn_Tracker_Liberty Tracker0 PATH 115200` (stations 1 and 2) |
+//! | `isotrak` | `vrpn_Tracker_Isotrak Tracker0 PATH 19200` (stations 1 and 2) |
+//! | `3space` | `vrpn_Tracker_3Space Tracker0 PATH 19200` (stations 1 and 2) |
+//! | `polaris` | `vrpn_Tracker_NDI_Polaris Tracker0 PATH 2` and two lines naming `.rom` files (any contents, 1-1024 bytes) |
+//! | `crossbow` | `vrpn_Tracker_Crossbow Tracker0 PATH 38400 2.0 100` |
+//! | `gps` | `vrpn_Tracker_GPS Tracker0 PATH 4800` |
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -43,11 +49,17 @@ use std::time::{Duration, Instant};
 
 use vrpn::drivers::cerealbox::record::revolutions;
 use vrpn::drivers::cerealbox::sim::{self as cereal_sim, CerealSim};
+use vrpn::drivers::crossbow::sim::{self as crossbow_sim, CrossbowSim};
 use vrpn::drivers::dyna::sim::{self as dyna_sim, DynaSim};
+use vrpn::drivers::gps::sim::{self as gps_sim, GpsSim};
 use vrpn::drivers::joylin::event::Kind;
 use vrpn::drivers::joylin::sim::{self as joy_sim, JoystickSim};
+use vrpn::drivers::liberty::sim::{self as liberty_sim, LibertySim};
 use vrpn::drivers::magellan::record::{axis_value, RESET_NULL_RADIUS};
 use vrpn::drivers::magellan::sim::{self as magellan_sim, MagellanSim, Sent};
+use vrpn::drivers::polaris::sim::{self as polaris_sim, PolarisSim};
+use vrpn::drivers::threespace::record::Model;
+use vrpn::drivers::threespace::sim::{self as threespace_sim, ThreeSpaceSim};
 use vrpn::sim::DeviceModel;
 use vrpn::sim::PtyDevice;
 use vrpn::Now;
@@ -165,8 +177,89 @@ pub fn simulate(
                 emit(state.feed(dev))
             })
         }
+        "liberty" => {
+            let mut seen = 0;
+            let model = || {
+                let mut cfg = liberty_sim::SimConfig::new(liberty_sim::Kind::Liberty, 115_200);
+                cfg.keep_log = true;
+                cfg.stations = vec![1, 2];
+                LibertySim::new(cfg)
+            };
+            SimThread::start(path, model, move |dev, _| {
+                let sent = dev.model.sent();
+                emit(pose_lines(sent[seen..].iter().map(|r| r.sample.expected())));
+                seen = sent.len();
+            })
+        }
+        "isotrak" | "3space" => {
+            let mut seen = 0;
+            let which = if kind == "isotrak" {
+                Model::Isotrak
+            } else {
+                Model::ThreeSpace
+            };
+            let model = move || {
+                let mut cfg = threespace_sim::SimConfig::new(which, 19_200);
+                cfg.keep_log = true;
+                cfg.stations = vec![1, 2];
+                ThreeSpaceSim::new(cfg)
+            };
+            SimThread::start(path, model, move |dev, _| {
+                let sent = dev.model.sent();
+                emit(pose_lines(sent[seen..].iter().map(|r| r.sample.expected())));
+                seen = sent.len();
+            })
+        }
+        "polaris" => {
+            let mut seen = 0;
+            let model = || {
+                let mut cfg = polaris_sim::SimConfig::new();
+                cfg.keep_log = true;
+                PolarisSim::new(cfg)
+            };
+            SimThread::start(path, model, move |dev, _| {
+                let sent = dev.model.sent();
+                emit(pose_lines(sent[seen..].iter().map(|r| r.values)));
+                seen = sent.len();
+            })
+        }
+        "crossbow" => {
+            let mut seen = 0;
+            let model = || {
+                let mut cfg = crossbow_sim::SimConfig::new(38_400);
+                cfg.keep_log = true;
+                CrossbowSim::new(cfg)
+            };
+            SimThread::start(path, model, move |dev, _| {
+                let sent = dev.model.sent();
+                emit(pose_lines(
+                    sent[seen..].iter().map(|r| (0, [0.0; 3], r.values.0)),
+                ));
+                seen = sent.len();
+            })
+        }
+        "gps" => {
+            let mut seen = 0;
+            let model = || {
+                let mut cfg = gps_sim::SimConfig::new(4_800);
+                cfg.keep_log = true;
+                GpsSim::new(cfg)
+            };
+            SimThread::start(path, model, move |dev, _| {
+                let sent = dev.model.sent();
+                emit(pose_lines(
+                    sent[seen..]
+                        .iter()
+                        .map(|f| (0, f.values, [0.0, 0.0, 0.0, 1.0])),
+                ));
+                seen = sent.len();
+            })
+        }
         _ => {
-            panic!("DEVICE_SIM: fastrak, flock, magellan, cerealbox, dyna or joylin, not {kind:?}")
+            panic!(
+                "DEVICE_SIM: fastrak, flock, magellan, cerealbox, dyna, joylin, liberty, \
+                 isotrak, 3space, polaris, crossbow or gps, not {kind:?}"
+            )
         }
     };
     println!("{kind} simulator on {} for {duration:?}", path.display());
@@ -182,6 +275,18 @@ pub fn simulate(
         std::fs::write(file, text).expect("DEVICE_SIM_EXPECT: a writable file");
         println!("{} expected reports in {}", lines.len(), file.display());
     }
+}
+
+/// One `pose S X Y Z QX QY QZ QW` line per pose.
+fn pose_lines(poses: impl Iterator<Item = (usize, [f64; 3], [f64; 4])>) -> Vec<String> {
+    poses
+        .map(|(s, p, q)| {
+            format!(
+                "pose {s} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6}",
+                p[0], p[1], p[2], q[0], q[1], q[2], q[3]
+            )
+        })
+        .collect()
 }
 
 /// One line `analog V0 V1 …`.

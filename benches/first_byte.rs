@@ -9,10 +9,12 @@
 //!   time), p50 / p90 / p99 / max.
 //! * `startup`: server start to the first report at a client, Fastrak and Flock of Birds
 //!   simulators on pseudo-terminals, three runs each.
+//! * `trackers`: the bare-pty baseline again, then first-byte accuracy and start-up of the
+//!   Polaris, Liberty, ISOTRAK and 3SPACE drivers on their simulators (`serial_trackers.rs`).
 //! * `khz`: a `vrpn_server` child process with a 1 kHz NULL tracker: report intervals as a
 //!   client sees them (sender timestamps) and the server's CPU over 10 s (from /proc).
 //!
-//! `cargo bench --bench first_byte [-- first-byte|startup|khz]` (all three by default).
+//! `cargo bench --bench first_byte [-- first-byte|startup|khz|trackers]` (all by default).
 //!
 //! For comparisons with another implementation's server, by hand:
 //! * `FIRST_BYTE_EXTERNAL=PORT FIRST_BYTE_TTY=PATH`: only the simulator (its pseudo-terminal
@@ -21,7 +23,8 @@
 //! * `DEVICE_SIM=KIND FIRST_BYTE_TTY=PATH [DEVICE_SIM_SECONDS=N] [DEVICE_SIM_EXPECT=FILE]`:
 //!   only a simulator on PATH for N seconds (30), to serve it with any server and read it
 //!   with any client: `fastrak` (as in `first-byte`), `flock` (as in `startup`), `magellan`,
-//!   `cerealbox`, `dyna` or `joylin`; FILE gets what a client must have received, and
+//!   `cerealbox`, `dyna`, `joylin`, `liberty`, `isotrak`, `3space`, `polaris`, `crossbow` or
+//!   `gps`; FILE gets what a client must have received, and
 //!   `DEVICE_SIM_MUTE=S` keeps the device silent for its first S seconds, `DEVICE_SIM_REST=S`
 //!   the Magellan's puck still (see `device_sim.rs`).
 //! * `VRPN_KHZ_SERVER=PROGRAM`: the `khz` part runs PROGRAM (it must take
@@ -37,6 +40,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 mod device_sim;
+mod serial_trackers;
 
 use nix::poll::{poll, PollFd, PollFlags};
 use vrpn::drivers::fastrak::record::METRES_PER_INCH;
@@ -97,6 +101,10 @@ fn main() {
     }
     if want("khz") {
         khz_loop();
+    }
+    if want("trackers") {
+        pty_baseline();
+        serial_trackers::run();
     }
     let _ = std::fs::remove_dir_all(tty_dir());
 }

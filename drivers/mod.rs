@@ -13,6 +13,7 @@ use crate::driver::Driver;
 pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
+pub mod crossbow;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
@@ -22,6 +23,7 @@ pub mod gamepads;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
+pub mod gps;
 #[cfg(test)]
 mod hid_config_tests;
 #[cfg(test)]
@@ -33,13 +35,21 @@ pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
+pub mod inertiamouse;
 pub mod joylin;
+pub mod liberty;
 pub mod magellan;
 pub mod one_euro;
+pub mod orb;
 pub mod pinchglove;
+pub mod polaris;
+pub mod python;
+pub mod radamec;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod threespace;
+pub mod tng3;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
@@ -79,20 +89,30 @@ pub static REGISTRY: &[&Driver] = &[
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &cerealbox::DRIVER,
+    &crossbow::DRIVER,
     &dyna::DRIVER,
     &dtrack::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
+    &gps::DRIVER,
     &immersionbox::DRIVER,
+    &inertiamouse::DRIVER,
     &joylin::DRIVER,
+    &liberty::DRIVER,
     &magellan::DRIVER,
-    &spaceball::DRIVER,
-    &glove5dt::DRIVER,
+    &biosciences::DRIVER,
     &glove5dt16::DRIVER,
+    &glove5dt::DRIVER,
+    &orb::DRIVER,
+    &spaceball::DRIVER,
     &streaming_arduino::DRIVER,
     &zaber::DRIVER,
-    &biosciences::DRIVER,
     &pinchglove::DRIVER,
+    &polaris::DRIVER,
+    &python::DRIVER,
+    &radamec::DRIVER,
+    &threespace::DRIVER,
+    &tng3::DRIVER,
     &uncjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).

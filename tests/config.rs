@@ -196,12 +196,12 @@ fn sample_config_commented_examples_parse() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("vrpn.cfg.sample"))
             .unwrap();
     let mut uncommented = String::new();
-    // After a Fastrak line ending in '\\' or '/', the next line continues the entry.
+    // After an entry line ending in '\\' or '/', the next line continues the entry.
     let mut continued = false;
     for line in text.lines() {
         if let Some(rest) = line.strip_prefix('#') {
             let continues = continued;
-            continued = rest.starts_with("vrpn_Tracker_Fastrak") || continues;
+            continued = rest.starts_with("vrpn_") || continues;
             continued &= rest.ends_with(['\\', '/']);
             if continues
                 || rest.starts_with("vrpn_")
@@ -221,6 +221,7 @@ fn sample_config_commented_examples_parse() {
                 || ["absolute", "vel_scale", "Wand", "Stylus", "end"]
                     .iter()
                     .any(|k| rest.starts_with(k))
+                || rest.ends_with(".rom")
             {
                 uncommented.push_str(rest);
                 uncommented.push('\n');
@@ -245,6 +246,16 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_Fastrak",
+            "vrpn_Tracker_3Space",
+            "vrpn_Tracker_Isotrak",
+            "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_Liberty",
+            "vrpn_Tracker_NDI_Polaris",
+            "vrpn_Tracker_Crossbow",
+            "vrpn_Tracker_GPS",
+            "vrpn_inertiamouse",
+            "vrpn_GlobalHapticsOrb",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
@@ -261,6 +272,9 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_PinchGlove",
             "vrpn_Joystick",
             "vrpn_ImmersionBox",
+            "vrpn_Radamec_SPI",
+            "vrpn_Tng3",
+            "vrpn_Button_Python",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",

@@ -20,6 +20,7 @@
 //! * device names must be at most [`crate::wire::MAX_NAME_LEN`] bytes and contain no `@`;
 //! * references to other devices must be `*name` (this server) or `name@host` (another one).
 
+pub mod continuation;
 mod device_ref;
 mod error;
 pub mod fields;

@@ -312,6 +312,13 @@ impl Cx<'_> {
         self.port.set_dtr(on);
     }
 
+    /// Changes the line's speed on the open port, once everything written before has been
+    /// handed to it (for a device told to switch its own rate; the port opens again at
+    /// [`Protocol::port_kind`]'s rate).
+    pub fn set_baud(&mut self, baud: u32) {
+        self.port.set_baud(baud);
+    }
+
     /// The port's requests so far in this call (for protocols built from parts that take
     /// [`PortOps`]).
     pub fn port(&mut self) -> &mut PortOps {

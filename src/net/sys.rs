@@ -1,7 +1,7 @@
 //! The two system calls mio does not offer: receiving several datagrams, with their sources,
 //! in one call (`recvmmsg`), and sending datagrams to many destinations in one call
-//! (`sendmmsg`). The crate's only `unsafe` code outside the programs' signal handlers lives
-//! here.
+//! (`sendmmsg`). The crate's only `unsafe` code outside the programs' signal handlers, the C and
+//! Python bindings and the drivers' device ioctls lives here.
 #![allow(unsafe_code)]
 
 use std::io;

@@ -257,6 +257,12 @@ impl<D: SerialDriver> SerialDevice<D> {
                     PortOp::SetRts(on) => port.set_rts(on),
                     PortOp::SetDtr(on) => port.set_dtr(on),
                     PortOp::Reopen => reopen = true,
+                    PortOp::SetBaud(baud) => {
+                        if let Err(e) = port.set_baud(baud) {
+                            failure = Some(format!("cannot set {baud} baud: {e}"));
+                            break;
+                        }
+                    }
                 }
             }
         }

@@ -73,6 +73,9 @@ pub enum PortOp {
     SetDtr(bool),
     /// Close the port and open it again (the driver's [`SerialDriver::opened`] runs again).
     Reopen,
+    /// Change the line's speed (both directions) on the open port, at once: for a device told
+    /// to switch its own rate (NDI Polaris `COMM`). Ask for it when nothing is being sent.
+    SetBaud(u32),
 }
 
 /// The requests a driver makes during one call, carried out in order by the serial layer right
@@ -125,6 +128,11 @@ impl PortOps {
     /// Closes and reopens the port.
     pub fn reopen(&mut self) {
         self.ops.push(PortOp::Reopen);
+    }
+
+    /// Changes the line's speed on the open port (see [`PortOp::SetBaud`]).
+    pub fn set_baud(&mut self, baud: u32) {
+        self.ops.push(PortOp::SetBaud(baud));
     }
 
     /// The requests, in order.

@@ -205,6 +205,20 @@ impl Port {
         }
     }
 
+    /// Changes the line's speed, both directions, at once (`tcsetattr(TCSANOW)`); the framing
+    /// and raw mode stay as opened.
+    pub fn set_baud(&mut self, baud: u32) -> io::Result<()> {
+        let Port::Serial(_) = self else {
+            return Ok(());
+        };
+        let fd = self.fd();
+        let speed = baud_rate(baud)?;
+        let mut t = termios::tcgetattr(fd).map_err(errno)?;
+        termios::cfsetispeed(&mut t, speed).map_err(errno)?;
+        termios::cfsetospeed(&mut t, speed).map_err(errno)?;
+        termios::tcsetattr(fd, SetArg::TCSANOW, &t).map_err(errno)
+    }
+
     /// Sets DTR (best effort, as [`set_rts`](Self::set_rts)).
     pub fn set_dtr(&mut self, on: bool) {
         if let Port::Serial(t) = self {

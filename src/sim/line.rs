@@ -21,6 +21,9 @@ pub trait DeviceModel {
     fn set_rts(&mut self, _on: bool, _now: Now) {}
     /// The host set DTR.
     fn set_dtr(&mut self, _on: bool, _now: Now) {}
+    /// The host changed the line's speed (a device told to switch its own rate checks that
+    /// the host followed; bytes at a mismatched rate are garbage to either end).
+    fn set_baud(&mut self, _baud: u32, _now: Now) {}
     /// Appends to `out` what the device sends at or before `now` (streamed records, replies).
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>);
     /// When the device next has something to send by itself (streaming), if ever.
@@ -167,6 +170,7 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
                 PortOp::FlushOutput => {}
                 PortOp::SetRts(on) => self.device.set_rts(on, self.now),
                 PortOp::SetDtr(on) => self.device.set_dtr(on, self.now),
+                PortOp::SetBaud(baud) => self.device.set_baud(baud, self.now),
                 PortOp::Reopen => reopen = true,
             }
         }

@@ -62,6 +62,25 @@ fn open_pty() -> io::Result<Pty> {
     })
 }
 
+/// The speed set on the slave end (which the driver configures), in bits per second, for
+/// the standard rates.
+fn line_speed(pty: &Pty) -> Option<u32> {
+    use termios::BaudRate as B;
+    let mode = termios::tcgetattr(pty._slave.as_raw_fd()).ok()?;
+    Some(match termios::cfgetospeed(&mode) {
+        B::B300 => 300,
+        B::B1200 => 1200,
+        B::B2400 => 2400,
+        B::B4800 => 4800,
+        B::B9600 => 9600,
+        B::B19200 => 19200,
+        B::B38400 => 38400,
+        B::B57600 => 57600,
+        B::B115200 => 115200,
+        _ => return None,
+    })
+}
+
 /// One write to the line: when, where in the stream, how many bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Written {
@@ -86,6 +105,8 @@ pub struct PtyDevice<M: DeviceModel> {
     written: u64,
     /// Keep the write log (off by default; on for timing measurements).
     pub log_writes: bool,
+    /// The line speed the driver last set on its end, as last told to the model.
+    baud: Option<u32>,
 }
 
 impl<M: DeviceModel> PtyDevice<M> {
@@ -101,6 +122,7 @@ impl<M: DeviceModel> PtyDevice<M> {
             writes: Vec::new(),
             written: 0,
             log_writes: false,
+            baud: None,
         };
         d.plug()?;
         Ok(d)
@@ -132,6 +154,7 @@ impl<M: DeviceModel> PtyDevice<M> {
         let pty = open_pty()?;
         let _ = std::fs::remove_file(&self.link);
         std::os::unix::fs::symlink(&pty.slave_path, &self.link)?;
+        self.baud = line_speed(&pty);
         self.pty = Some(pty);
         Ok(())
     }
@@ -149,6 +172,15 @@ impl<M: DeviceModel> PtyDevice<M> {
         };
         let fd = pty.master.as_raw_fd();
         let mut moved = false;
+        // A speed the driver set since the last step applies to the bytes read now (a driver
+        // that switches rates waits for the line to be idle before it does).
+        let speed = line_speed(pty);
+        if speed.is_some() && speed != self.baud {
+            self.baud = speed;
+            if let Some(b) = speed {
+                self.model.set_baud(b, now);
+            }
+        }
         loop {
             match nix::unistd::read(fd, &mut self.buf) {
                 Ok(0) => break,
@@ -237,5 +269,36 @@ mod tests {
             std::thread::sleep(std::time::Duration::from_millis(1));
         }
         assert_eq!(got, b"\r\n\x03");
+    }
+
+    /// Keeps the speeds it is told.
+    struct Speeds(Vec<u32>);
+
+    impl DeviceModel for Speeds {
+        fn receive(&mut self, _bytes: &[u8], _now: Now) {}
+        fn set_baud(&mut self, baud: u32, _now: Now) {
+            self.0.push(baud);
+        }
+        fn transmit(&mut self, _now: Now, _out: &mut Vec<u8>) {}
+        fn next_deadline(&self) -> Option<Instant> {
+            None
+        }
+    }
+
+    #[test]
+    fn the_model_hears_of_the_speeds_the_driver_sets() {
+        let dir = std::env::temp_dir().join(format!("vrpn-pty-speed-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("tty");
+        let mut d = PtyDevice::open(Speeds(Vec::new()), &link).unwrap();
+        let kind = |baud| crate::serial::PortKind::Serial(crate::serial::PortSettings::n81(baud));
+        let mut port = crate::serial::Port::open(link.to_str().unwrap(), kind(9600)).unwrap();
+        d.step(Now::read()).unwrap();
+        port.set_baud(115200).unwrap();
+        d.step(Now::read()).unwrap();
+        d.step(Now::read()).unwrap();
+        assert_eq!(d.model.0, [9600, 115200]);
+        drop(d);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

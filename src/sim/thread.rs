@@ -66,6 +66,9 @@ impl<M: DeviceModel> DeviceModel for Noisy<M> {
     fn set_dtr(&mut self, on: bool, now: Now) {
         self.inner.set_dtr(on, now);
     }
+    fn set_baud(&mut self, baud: u32, now: Now) {
+        self.inner.set_baud(baud, now);
+    }
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
         let before = out.len();
         self.inner.transmit(now, out);

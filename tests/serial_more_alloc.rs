@@ -1,0 +1,141 @@
+//! The Radamec SPI, TNG-3 and UNC Python drivers report without allocating: a counting
+//! global allocator around every driver call while the simulators stream through them (reads
+//! split at random points, garbage on the line), and around the Python box's samples while
+//! its buttons change and bounce.
+
+use std::cell::Cell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use vrpn::devices::ServerDevice;
+use vrpn::driver::{Lifecycle, Protocol};
+use vrpn::drivers::python::source::StatusSource;
+use vrpn::drivers::python::{PythonButtons, READS_PER_SAMPLE, SAMPLE_PERIOD};
+use vrpn::drivers::radamec::sim::{RadamecSim, SimConfig as RadamecConfig};
+use vrpn::drivers::tng3::sim::{SimConfig as Tng3Config, Tng3Sim};
+use vrpn::server::config::parse_one;
+use vrpn::sim::{DeviceModel, VirtualLine};
+use vrpn::{AnalogRemote, ButtonRemote, Connection};
+
+#[path = "common/counted_driver.rs"]
+mod counted_driver;
+use counted_driver::{counted, start, Counted, COUNT};
+
+/// Counts every Analog and Button report `name` sends on `conn`.
+fn count_reports(name: &str, conn: &Connection) -> (Rc<Cell<u64>>, AnalogRemote, ButtonRemote) {
+    let n = Rc::new(Cell::new(0u64));
+    let analog = AnalogRemote::on_connection(name, conn).unwrap();
+    let buttons = ButtonRemote::on_connection(name, conn).unwrap();
+    let (a, b) = (n.clone(), n.clone());
+    analog.on_report(move |_| a.set(a.get() + 1));
+    buttons.on_change(move |_| b.set(b.get() + 1));
+    (n, analog, buttons)
+}
+
+/// Streams `seconds` with `noise` on the line once a second, after a warm-up with the same
+/// noise, and returns (reports, allocations) of the counted part.
+fn stream<P: Protocol, M: DeviceModel>(
+    line: &mut VirtualLine<Counted<Lifecycle<P>>, M>,
+    reports: &Cell<u64>,
+    noise: &[u8],
+    seconds: u32,
+) -> (u64, u64) {
+    line.split_reads = true;
+    line.run_for(Duration::from_millis(700));
+    assert!(line.driver.0.is_streaming());
+    line.inject(noise);
+    line.run_for(Duration::from_millis(1500));
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..seconds {
+        line.run_for(Duration::from_secs(1));
+        line.inject(noise);
+    }
+    assert!(line.driver.0.stats().skipped_bytes > 0);
+    (reports.get() - before, COUNT.with(Cell::get))
+}
+
+fn quiet_texts() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+}
+
+#[test]
+fn radamec_streams_without_allocating() {
+    quiet_texts();
+    let cfg: vrpn::drivers::radamec::Radamec = parse_one("vrpn_Radamec_SPI R0 /dev/ttyS0 38400\n");
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("R0", &conn);
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let sim = RadamecSim::new(RadamecConfig::new());
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 5);
+    let (n, allocations) = stream(&mut line, &reports, &[0x01, 0xA1, 0x33], 5);
+    assert!(n >= 100, "{n} reports");
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+#[test]
+fn tng3_streams_without_allocating() {
+    quiet_texts();
+    let cfg: vrpn::drivers::tng3::Tng3 = parse_one("vrpn_Tng3 T0 /dev/ttyS0 8 8\n");
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("T0", &conn);
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let sim = Tng3Sim::new(Tng3Config::new());
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
+    let (n, allocations) = stream(&mut line, &reports, &[0x33, 0x55, 0x12], 5);
+    assert!(n >= 200, "{n} reports");
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+/// A parallel port whose buttons change every few samples and bounce now and then, counting
+/// nothing on the heap.
+struct Pattern {
+    reads: u64,
+}
+
+impl StatusSource for Pattern {
+    fn open(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn read_status(&mut self) -> std::io::Result<u8> {
+        self.reads += 1;
+        let sample = self.reads / READS_PER_SAMPLE as u64;
+        // Every 7th sample bounces: one read of it differs.
+        let bounce = sample % 7 == 3 && self.reads % READS_PER_SAMPLE as u64 == 5;
+        let state = ((sample / 3) as u8) << 3 & 0xF8;
+        Ok(if bounce { state ^ 0x40 } else { state })
+    }
+    fn close(&mut self) {}
+    fn path(&self) -> &str {
+        "/dev/parport0"
+    }
+}
+
+#[test]
+fn python_box_samples_without_allocating() {
+    quiet_texts();
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("P0", &conn);
+    let mut device = PythonButtons::new("P0", Pattern { reads: 0 }, &conn).unwrap();
+    let mut now = start();
+    let mut run = |device: &mut PythonButtons<Pattern>, samples: u32| {
+        for _ in 0..samples {
+            counted(|| device.mainloop(now));
+            conn.mainloop().unwrap();
+            now = now.plus(SAMPLE_PERIOD);
+        }
+    };
+    run(&mut device, 200);
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    run(&mut device, 1000);
+    let n = reports.get() - before;
+    let stats = device.stats();
+    assert!(n >= 300, "{n} reports");
+    assert!(stats.bouncing >= 100, "{stats:?}");
+    assert_eq!(
+        COUNT.with(Cell::get),
+        0,
+        "allocations while sending {n} reports"
+    );
+}
