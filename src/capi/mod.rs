@@ -35,6 +35,7 @@ pub mod connection;
 mod handle;
 pub mod imager;
 pub mod output_devices;
+pub mod output_servers;
 pub mod remotes;
 pub mod server;
 pub mod text;
