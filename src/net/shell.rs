@@ -187,15 +187,7 @@ impl Shell {
         port: u16,
     ) -> Result<Shell, Error> {
         let ip = nic.unwrap_or(Ipv4Addr::UNSPECIFIED);
-        // Bind TCP first so port 0 picks a number that UDP then shares.
-        let tcp = TcpListener::bind(SocketAddr::V4(SocketAddrV4::new(ip, port)))
-            .map_err(|e| Error::io(format!("listening on TCP {ip}:{port}"), e))?;
-        let port = tcp
-            .local_addr()
-            .map_err(|e| Error::io("reading the TCP listener address", e))?
-            .port();
-        let udp = UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(ip, port)))
-            .map_err(|e| Error::io(format!("listening on UDP {ip}:{port}"), e))?;
+        let (tcp, udp, port) = bind_listeners(ip, port)?;
         let tcp = Sock::register_listener(reactor, tcp)
             .map_err(|e| Error::io("registering listeners", e))?;
         let udp = Sock::register_listener(reactor, udp)
@@ -833,6 +825,29 @@ impl Drop for Shell {
                 }
                 Listeners::None => {}
             }
+        }
+    }
+}
+
+/// Binds a server's TCP and UDP listeners to one port. TCP is bound first so that port 0 picks
+/// a number UDP then shares; that number may already be some other program's UDP port, in which
+/// case another number is tried (only for port 0: a port the user named is theirs to fix).
+fn bind_listeners(ip: Ipv4Addr, wanted: u16) -> Result<(TcpListener, UdpSocket, u16), Error> {
+    const ATTEMPTS: usize = 16;
+    let mut attempt = 0;
+    loop {
+        attempt += 1;
+        let tcp = TcpListener::bind(SocketAddr::V4(SocketAddrV4::new(ip, wanted)))
+            .map_err(|e| Error::io(format!("listening on TCP {ip}:{wanted}"), e))?;
+        let port = tcp
+            .local_addr()
+            .map_err(|e| Error::io("reading the TCP listener address", e))?
+            .port();
+        match UdpSocket::bind(SocketAddr::V4(SocketAddrV4::new(ip, port))) {
+            Ok(udp) => return Ok((tcp, udp, port)),
+            Err(e) if wanted == 0 && e.kind() == io::ErrorKind::AddrInUse && attempt < ATTEMPTS => {
+            }
+            Err(e) => return Err(Error::io(format!("listening on UDP {ip}:{port}"), e)),
         }
     }
 }
