@@ -67,7 +67,12 @@ fn open_pty() -> io::Result<Pty> {
 fn line_speed(pty: &Pty) -> Option<u32> {
     use termios::BaudRate as B;
     let mode = termios::tcgetattr(pty._slave.as_raw_fd()).ok()?;
-    Some(match termios::cfgetospeed(&mode) {
+    // nix's cfgetospeed panics on a speed code it has no name for (a line in the middle of
+    // being closed or reconfigured can show one): such a speed is simply not a standard rate.
+    let speed =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| termios::cfgetospeed(&mode)))
+            .ok()?;
+    Some(match speed {
         B::B300 => 300,
         B::B1200 => 1200,
         B::B2400 => 2400,
