@@ -125,15 +125,17 @@ impl Protocol for OrbProtocol {
     }
 
     fn reset_received(&mut self, bytes: &[u8], cx: &mut Cx<'_>) -> Reset {
-        if !bytes.contains(&RESET_ANSWER) {
+        let Some(at) = bytes.iter().position(|&b| b == RESET_ANSWER) else {
             return Reset::Working;
-        }
+        };
         self.answer_by = None;
         self.probe_at = Some(cx.now.mono + PROBE_AFTER);
         cx.say(
             TextSeverity::Normal,
             format_args!("vrpn_GlobalHapticsOrb::reset(): Reset complete (this is good)"),
         );
+        // Events the Orb sent right after its answer can share the read: they are events.
+        self.received(&bytes[at + 1..], cx);
         Reset::Done
     }
 

@@ -79,6 +79,9 @@ pub struct VirtualLine<D: SerialDriver, M: DeviceModel> {
     pub latency: Duration,
     /// Deliver device output in randomly split reads.
     pub split_reads: bool,
+    /// A slow reader (a loaded machine): the poll wakes for a byte, the read comes this much
+    /// later and takes everything that arrived by then, all stamped with the wake time.
+    pub read_lag: Duration,
     rng: Rng,
     /// Device output is lost while true (a silent or unplugged device).
     pub silent: bool,
@@ -105,6 +108,7 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
             read_buf: Vec::new(),
             latency: Duration::from_micros(50),
             split_reads: false,
+            read_lag: Duration::ZERO,
             rng: Rng::new(seed),
             silent: false,
             open: false,
@@ -197,12 +201,17 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
             let Some(&(at, _)) = self.to_host.front() else {
                 return;
             };
-            if at > self.now.mono || !self.open {
+            if at + self.read_lag > self.now.mono || !self.open {
                 return;
             }
-            // Everything that arrived by now is what one read would return; a split read
-            // returns only a prefix of it.
-            let ready = self.to_host.iter().take_while(|(t, _)| *t <= at).count();
+            // Everything that arrived by the read is what it returns; a split read returns
+            // only a prefix of it.
+            let read_at = at + self.read_lag;
+            let ready = self
+                .to_host
+                .iter()
+                .take_while(|(t, _)| *t <= read_at)
+                .count();
             let n = if self.split_reads && ready > 1 {
                 1 + self.rng.below(ready as u64) as usize
             } else {
@@ -233,7 +242,7 @@ impl<D: SerialDriver, M: DeviceModel> VirtualLine<D, M> {
         [
             self.driver.next_deadline(),
             self.device.next_deadline(),
-            self.to_host.front().map(|&(t, _)| t),
+            self.to_host.front().map(|&(t, _)| t + self.read_lag),
             self.reopen_at,
         ]
         .into_iter()

@@ -417,15 +417,35 @@ pub fn assert_run_of<T: PartialEq + Debug>(
 ) -> Vec<usize> {
     assert!(!got.is_empty(), "{what}: nothing received");
     let runs = runs_in(got, sent, after);
-    assert!(
-        !runs.is_empty(),
-        "{what}: the {} values received are not a run of the {} sent from {after} (first \
-         received {:?}; sent from there: {:?})",
-        got.len(),
-        sent.len().saturating_sub(after),
-        got[0],
-        &sent[after.min(sent.len())..sent.len().min(after + 3)]
-    );
+    if runs.is_empty() {
+        // Where the longest stretch that does match ends tells what went wrong.
+        let (start, len) = (after..sent.len())
+            .map(|i| {
+                let n = got
+                    .iter()
+                    .zip(&sent[i..])
+                    .take_while(|(g, s)| g == s)
+                    .count();
+                (i, n)
+            })
+            .max_by_key(|&(_, n)| n)
+            .unwrap_or((after, 0));
+        let around = |v: &[T], at: usize| -> String {
+            let lo = at.saturating_sub(2).min(v.len());
+            format!("{:?}", &v[lo..v.len().min(at + 3)])
+        };
+        panic!(
+            "{what}: the {} values received are not a run of the {} sent from {after} (first \
+             received {:?}; sent from there: {:?}); the longest match starts at sent[{start}] \
+             and ends after {len} values: received around there {}, sent around there {}",
+            got.len(),
+            sent.len().saturating_sub(after),
+            got[0],
+            &sent[after.min(sent.len())..sent.len().min(after + 3)],
+            around(got, len),
+            around(sent, start + len),
+        );
+    }
     runs
 }
 
