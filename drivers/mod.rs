@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod adbox;
 pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
@@ -89,6 +90,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::forward::relay::config::RELAY,
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
+    &adbox::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -133,6 +135,7 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &adbox::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &dyna::sim::SIMULATOR,
     &fastrak::sim::SIMULATOR,
