@@ -20,6 +20,7 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod gametrak;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
@@ -83,6 +84,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &gametrak::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
