@@ -40,6 +40,7 @@ pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod nikon;
 pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
@@ -102,6 +103,7 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &nikon::DRIVER,
     &biosciences::DRIVER,
     &glove5dt16::DRIVER,
     &glove5dt::DRIVER,
@@ -139,4 +141,5 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &nikon::sim::SIMULATOR,
 ];

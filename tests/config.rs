@@ -282,6 +282,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
             "vrpn_Button_Python",
+            "vrpn_nikon_controls",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
