@@ -12,6 +12,7 @@ use crate::driver::Driver;
 
 pub mod adbox;
 pub mod biosciences;
+pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
@@ -21,6 +22,7 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod gametrak;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
@@ -45,6 +47,7 @@ pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod python;
 pub mod radamec;
 pub mod spaceball;
@@ -85,6 +88,9 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &gametrak::DRIVER,
+    &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
