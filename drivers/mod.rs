@@ -14,6 +14,7 @@ pub mod biosciences;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dead_reckoning;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
@@ -83,6 +84,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &dead_reckoning::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,

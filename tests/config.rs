@@ -279,7 +279,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
-            "vrpn_Tracker_FilterOneEuro"
+            "vrpn_Tracker_FilterOneEuro",
+            "vrpn_Tracker_DeadReckoning_Rotation"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
