@@ -47,6 +47,7 @@ pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod python;
 pub mod radamec;
 pub mod spaceball;
@@ -90,6 +91,7 @@ pub static REGISTRY: &[&Driver] = &[
     &dead_reckoning::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
