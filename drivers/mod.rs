@@ -45,12 +45,14 @@ pub mod pinchglove;
 pub mod polaris;
 pub mod python;
 pub mod radamec;
+pub mod serialmouse;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
+pub mod vpjoystick;
 pub mod wanda;
 pub mod xkeys;
 pub mod zaber;
@@ -111,9 +113,11 @@ pub static REGISTRY: &[&Driver] = &[
     &polaris::DRIVER,
     &python::DRIVER,
     &radamec::DRIVER,
+    &serialmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
+    &vpjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
@@ -137,4 +141,6 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &serialmouse::sim::SIMULATOR,
+    &vpjoystick::sim::SIMULATOR,
 ];
