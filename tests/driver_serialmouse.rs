@@ -39,7 +39,7 @@ fn check(sim: &SimulatedDevice<SerialMouseSim>, client: &Client, kind: MouseType
     let fits = (0..log.len()).find_map(|k| {
         let want = expected(kind, &log[k..]);
         let w: Vec<(usize, bool)> = want.iter().map(|c| (c.button, c.pressed)).collect();
-        (w.len() >= values.len() && w[..values.len()] == values[..]).then(|| (k, want))
+        (w.len() >= values.len() && w[..values.len()] == values[..]).then_some((k, want))
     });
     let Some((k, want)) = fits else {
         panic!("{kind:?}: the {} changes received are not what the packets say from any start: {values:?}", values.len());

@@ -37,7 +37,7 @@ fn check(sim: &SimulatedDevice<VpJoystickSim>, client: &Client, t0: Now) {
     let fits = (0..log.len()).find_map(|k| {
         let want = expected(&log[k..]);
         let w: Vec<(usize, bool)> = want.iter().map(|&(b, p, _)| (b, p)).collect();
-        (w.len() >= values.len() && w[..values.len()] == values[..]).then(|| (k, want))
+        (w.len() >= values.len() && w[..values.len()] == values[..]).then_some((k, want))
     });
     let Some((k, want)) = fits else {
         panic!(
