@@ -11,15 +11,18 @@
 use crate::driver::Driver;
 
 pub mod biosciences;
+pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dead_reckoning;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod gametrak;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
@@ -39,10 +42,12 @@ pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod nikon;
 pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod python;
 pub mod radamec;
 pub mod serialmouse;
@@ -85,6 +90,10 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &dead_reckoning::DRIVER,
+    &gametrak::DRIVER,
+    &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -102,6 +111,7 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &nikon::DRIVER,
     &biosciences::DRIVER,
     &glove5dt16::DRIVER,
     &glove5dt::DRIVER,
@@ -143,4 +153,5 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &magellan::sim::SIMULATOR,
     &serialmouse::sim::SIMULATOR,
     &vpjoystick::sim::SIMULATOR,
+    &nikon::sim::SIMULATOR,
 ];

@@ -218,9 +218,16 @@ fn sample_config_commented_examples_parse() {
                 ]
                 .iter()
                 .any(|k| rest.starts_with(&format!("{k}\t")))
-                || ["absolute", "vel_scale", "Wand", "Stylus", "end"]
-                    .iter()
-                    .any(|k| rest.starts_with(k))
+                || [
+                    "absolute",
+                    "vel_scale",
+                    "Wand",
+                    "Stylus",
+                    "end",
+                    "axis_mapping",
+                ]
+                .iter()
+                .any(|k| rest.starts_with(k))
                 || rest.ends_with(".rom")
             {
                 uncommented.push_str(rest);
@@ -278,11 +285,16 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_SerialMouse",
             "vrpn_Button_SerialMouse",
             "vrpn_VPJoystick",
+            "vrpn_nikon_controls",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
-            "vrpn_Tracker_FilterOneEuro"
+            "vrpn_Tracker_FilterOneEuro",
+            "vrpn_Tracker_DeadReckoning_Rotation",
+            "vrpn_Tracker_GameTrak",
+            "vrpn_Button_5DT_Server",
+            "vrpn_Poser_Analog"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
