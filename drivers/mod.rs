@@ -15,6 +15,7 @@ pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dead_reckoning;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
@@ -46,6 +47,7 @@ pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod python;
 pub mod radamec;
 pub mod spaceball;
@@ -86,8 +88,10 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &dead_reckoning::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
