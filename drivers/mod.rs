@@ -51,12 +51,14 @@ pub mod polaris;
 pub mod poser_analog;
 pub mod python;
 pub mod radamec;
+pub mod serialmouse;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
+pub mod vpjoystick;
 pub mod wanda;
 pub mod xkeys;
 pub mod zaber;
@@ -123,9 +125,11 @@ pub static REGISTRY: &[&Driver] = &[
     &polaris::DRIVER,
     &python::DRIVER,
     &radamec::DRIVER,
+    &serialmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
+    &vpjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
@@ -150,5 +154,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &serialmouse::sim::SIMULATOR,
+    &vpjoystick::sim::SIMULATOR,
     &nikon::sim::SIMULATOR,
 ];
