@@ -20,6 +20,7 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod gametrak;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
@@ -39,6 +40,7 @@ pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod nikon;
 pub mod one_euro;
 pub mod orb;
 pub mod parport_python;
@@ -84,6 +86,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &gametrak::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -101,6 +104,7 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &nikon::DRIVER,
     &biosciences::DRIVER,
     &glove5dt16::DRIVER,
     &glove5dt::DRIVER,
@@ -147,6 +151,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &joylin::sim::SIMULATOR,
     &liberty::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &nikon::sim::SIMULATOR,
     &orb::sim::SIMULATOR,
     &pinchglove::sim::SIMULATOR,
     &radamec::sim::SIMULATOR,
