@@ -78,8 +78,7 @@ fn radamec_streams_without_allocating() {
 fn sgibox_streams_without_allocating() {
     quiet_texts();
     // Toggles too: their presses make Alerts and light commands.
-    let cfg: vrpn::drivers::sgibox::SgiBox =
-        parse_one("vrpn_raw_SGIBox S0 /dev/ttyS0 0 1 2 3\n");
+    let cfg: vrpn::drivers::sgibox::SgiBox = parse_one("vrpn_raw_SGIBox S0 /dev/ttyS0 0 1 2 3\n");
     let conn = Connection::new_loopback();
     let (reports, _a, _b) = count_reports("S0", &conn);
     let driver = cfg.lifecycle(&conn).unwrap();
