@@ -109,8 +109,9 @@ const LINE: &str = "vrpn_Streaming_Arduino sa0 /dev/ttyd2 4\n";
 #[test]
 fn a_slow_reader_loses_nothing() {
     // A loaded machine reads late and takes several lines at once (the first ends the
-    // reset): each is reported but the first, which C++ discards on purpose (the Arduino may
-    // have been mid-line when the count arrived).
+    // reset): each is reported but the first, which this driver drops on purpose, as it
+    // does for a prompt reader (the Arduino may have been mid-line when the count arrived;
+    // C++ takes the first byte for the start of a line).
     let mut r = rig(LINE, 21);
     r.line.read_lag = Duration::from_millis(12);
     r.run_until_reports(100, Duration::from_secs(5));
