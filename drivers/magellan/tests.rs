@@ -203,7 +203,7 @@ fn assert_same(got: &[Event], want: &[Event]) {
 /// time), but for at most the last two records still on their way.
 fn assert_same_values(got: &[Event], want: &[Event]) {
     let untimed = |e: &Event| {
-        let mut e = e.clone();
+        let mut e = *e;
         match &mut e {
             Event::Analog(t, _) | Event::Button(t, _, _) => *t = TimeVal::ZERO,
         }
