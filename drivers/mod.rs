@@ -11,6 +11,7 @@
 use crate::driver::Driver;
 
 pub mod biosciences;
+pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
@@ -87,6 +88,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
     &gametrak::DRIVER,
+    &button_5dt_server::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,

@@ -289,7 +289,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_FilterOneEuro",
-            "vrpn_Tracker_GameTrak"
+            "vrpn_Tracker_GameTrak",
+            "vrpn_Button_5DT_Server"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

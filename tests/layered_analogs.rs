@@ -171,3 +171,100 @@ fn gametrak_reports_what_cxx_reports() {
     );
     assert_eq!(compared, 120 * 10);
 }
+
+/// A heard glove report or button change, in arrival order.
+enum Heard {
+    Glove(TimeVal, Vec<f64>),
+    Button(TimeVal, usize, bool),
+}
+
+#[test]
+fn glove_buttons_from_a_local_5dt16() {
+    use vrpn::drivers::glove5dt16::sim::{Glove16Sim, SimConfig};
+    use vrpn::sim::SimulatedDevice;
+    use vrpn::{AnalogRemote, ButtonRemote};
+    const T: [f64; 16] = [
+        2048.0, 1000.0, 3000.0, 2500.0, 1500.0, 2048.5, 100.0, 4000.0, 2000.0, 2100.0, 1800.0,
+        2600.0, 900.0, 3500.0, 0.0, 4095.0,
+    ];
+    let glove =
+        SimulatedDevice::start("glove16", || Glove16Sim::new(SimConfig::new(19200))).unwrap();
+    let thresholds: Vec<String> = T.iter().map(|t| t.to_string()).collect();
+    let cfg = format!(
+        "vrpn_5dt16 Glove {} 19200\nvrpn_Button_5DT_Server B5 Glove {}\n",
+        glove.path().display(),
+        thresholds.join(" ")
+    );
+    let server = ServerProcess::start(SERVER.as_ref(), &cfg).unwrap();
+    let at = |n: &str| format!("{n}@tcp://127.0.0.1:{}", server.port());
+    let analog = AnalogRemote::new(&at("Glove")).unwrap();
+    let buttons = ButtonRemote::new(&at("B5")).unwrap();
+    let heard: Rc<RefCell<Vec<Heard>>> = Rc::default();
+    let h = heard.clone();
+    analog.on_report(move |r| {
+        h.borrow_mut()
+            .push(Heard::Glove(r.sender_time, r.channels().to_vec()))
+    });
+    let h = heard.clone();
+    buttons.on_change(move |c| {
+        h.borrow_mut()
+            .push(Heard::Button(c.sender_time, c.button, c.state.is_pressed()))
+    });
+    let reports = || {
+        heard
+            .borrow()
+            .iter()
+            .filter(|h| matches!(h, Heard::Glove(..)))
+            .count()
+    };
+    let (a, b) = (&analog, &buttons);
+    pump_until(
+        &[&|| drop(a.mainloop()), &|| drop(b.mainloop())],
+        "60 glove reports",
+        &server,
+        || reports() >= 60,
+    );
+    // Every change is of a button whose side of its threshold differs in the latest report
+    // heard from what the client knew, and is stamped with that report's time (the server may
+    // merge reports of one pass); after the last report the client knows its state exactly.
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(200) {
+        let _ = analog.mainloop();
+        let _ = buttons.mainloop();
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let heard = heard.borrow();
+    let mut latest: Option<(TimeVal, Vec<bool>)> = None;
+    let mut known: Option<Vec<bool>> = None;
+    let mut first: Option<TimeVal> = None;
+    let mut compared = 0;
+    for h in heard.iter() {
+        match h {
+            Heard::Glove(t, ch) => {
+                let now: Vec<bool> = (0..16).map(|i| ch[i] > T[i]).collect();
+                if known.is_none() {
+                    known = Some(now.clone());
+                    first = Some(*t);
+                }
+                latest = Some((*t, now));
+            }
+            Heard::Button(t, i, p) => {
+                let (lt, now) = latest.as_ref().expect("a report before any change");
+                let known = known.as_mut().unwrap();
+                if Some(*t) == first || (compared == 0 && *t != *lt) {
+                    continue; // a change of the client's first report, or of one before it
+                }
+                assert_eq!((*t, *p), (*lt, now[*i]), "button {i}");
+                assert_ne!(known[*i], *p, "button {i} changed to what it was");
+                known[*i] = *p;
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(
+        known,
+        latest.map(|l| l.1),
+        "the client's buttons after the last report"
+    );
+    assert!(compared >= 20, "{compared} changes compared");
+}
