@@ -15,6 +15,7 @@ pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dead_reckoning;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
@@ -47,6 +48,7 @@ pub mod orb;
 pub mod parport_python;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod radamec;
 pub mod sgibox;
 pub mod spaceball;
@@ -87,8 +89,10 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &dead_reckoning::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,

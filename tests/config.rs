@@ -289,8 +289,10 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_FilterOneEuro",
+            "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_Tracker_GameTrak",
-            "vrpn_Button_5DT_Server"
+            "vrpn_Button_5DT_Server",
+            "vrpn_Poser_Analog"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
