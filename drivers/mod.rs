@@ -50,6 +50,7 @@ pub mod pinchglove;
 pub mod polaris;
 pub mod poser_analog;
 pub mod radamec;
+pub mod serialmouse;
 pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
@@ -57,6 +58,7 @@ pub mod streaming_arduino;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
+pub mod vpjoystick;
 pub mod wanda;
 pub mod xkeys;
 pub mod zaber;
@@ -122,10 +124,12 @@ pub static REGISTRY: &[&Driver] = &[
     &polaris::DRIVER,
     &parport_python::DRIVER,
     &radamec::DRIVER,
+    &serialmouse::DRIVER,
     &sgibox::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
+    &vpjoystick::DRIVER,
     &wanda::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
@@ -157,6 +161,8 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &joylin::sim::SIMULATOR,
     &liberty::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &serialmouse::sim::SIMULATOR,
+    &vpjoystick::sim::SIMULATOR,
     &nikon::sim::SIMULATOR,
     &orb::sim::SIMULATOR,
     &pinchglove::sim::SIMULATOR,
