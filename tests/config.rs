@@ -281,6 +281,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_ImmersionBox",
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
+            "vrpn_raw_SGIBox",
             "vrpn_Button_Python",
             "vrpn_Button_SerialMouse",
             "vrpn_Button_SerialMouse",
