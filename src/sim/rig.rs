@@ -428,7 +428,9 @@ pub fn resume_after<T: PartialEq>(heard: &[T], sent: &[T], logged: usize) -> usi
 /// Asserts that `got` (what the client received) is one contiguous run of `sent` (what the
 /// simulator logged) at or after `after`, so nothing was lost, added, changed or reordered
 /// (the client may have joined mid-stream, and the last records may still be on their way).
-/// Returns the possible start indexes.
+/// Returns the possible start indexes, the latest first: a device that starts its values over
+/// (after a reset or a replug) logs the same run more than once, and the client's log ends near
+/// the present, so the latest place is the one it heard (the one to check stamps against).
 pub fn assert_run_of<T: PartialEq + Debug>(
     got: &[T],
     sent: &[T],
@@ -466,6 +468,8 @@ pub fn assert_run_of<T: PartialEq + Debug>(
             around(sent, start + len),
         );
     }
+    let mut runs = runs;
+    runs.reverse();
     runs
 }
 
