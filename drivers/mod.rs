@@ -40,6 +40,7 @@ pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod inertiamouse;
+pub mod joyfly;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
@@ -96,6 +97,7 @@ pub static REGISTRY: &[&Driver] = &[
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
+    &joyfly::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
