@@ -2,6 +2,11 @@
 //! serving `vrpn_ADBox`, and a TCP client of its Button and Analog on 127.0.0.1: exact
 //! reports in order with first-byte stamps, garbage between answers, silence (the layout
 //! detected again), unplugging and reopening.
+//!
+//! Two timing facts of a loaded machine shape it: the start-up detection may end before the
+//! client's handshake (a server sends texts only to connected clients, so the start-up text
+//! is not waited for: the detection after the silence is), and the simulator's thread may be
+//! descheduled mid-answer (so it writes each answer whole, `SimConfig::burst`).
 
 use std::time::{Duration, Instant};
 
@@ -52,6 +57,7 @@ fn adbox_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("adbox", || {
         let mut cfg = SimConfig::new(19_200);
         cfg.keep_log = true;
+        cfg.burst = true;
         AdBoxSim::new(cfg)
     })
     .unwrap();
@@ -72,12 +78,6 @@ fn adbox_through_vrpn_server_to_a_client() {
     eprintln!(
         "ADBox: vrpn_server start to the first report {:.0} ms",
         stamps[0].seconds_since(t0.wall) * 1e3
-    );
-    client.wait_text(
-        0,
-        "ad-box with 24 digital and 8 analog ports detected",
-        Duration::from_secs(1),
-        &server,
     );
     let check = |from: usize| {
         let (want, at) = sent(&sim);
@@ -123,7 +123,7 @@ fn adbox_through_vrpn_server_to_a_client() {
     sim.set_mute(false);
     client.wait_text(
         from,
-        "analog ports detected",
+        "ad-box with 24 digital and 8 analog ports detected",
         Duration::from_secs(4),
         &server,
     );

@@ -25,7 +25,8 @@
 //!
 //! # Supervision
 //!
-//! An answer not complete [`REPLY_WAIT`] after its request is dropped and `U` written again.
+//! An answer whose next byte does not come within [`REPLY_WAIT`] (of the request, then of
+//! each byte: C++'s time-out per byte) is dropped and `U` written again.
 //! An answer whose analog high bytes exceed 3 (out of step with the requests, after line
 //! noise) is dropped, and the next `U` is written once the line has been quiet for
 //! [`QUIET`]. [`TIMEOUT`] without an answer starts the detection again.
@@ -241,6 +242,8 @@ impl Protocol for AdBoxProtocol {
             if self.got < layout.len {
                 self.answer[self.got] = b;
                 self.got += 1;
+                // C++ waits up to this long for each byte.
+                self.wait_until = Some(cx.now.mono + REPLY_WAIT);
             }
             if self.got == layout.len {
                 self.answer(layout, cx);

@@ -2,7 +2,8 @@
 //! a pseudo-terminal.
 //!
 //! Each `U` is answered [`SimConfig::reply_delay`] later with answer `k` ([`answer`]), of the
-//! length [`SimConfig::len`] (14, 18 or 19 bytes). With [`SimConfig::keep_log`] it logs what a
+//! length [`SimConfig::len`] (14, 18 or 19 bytes), a byte per character time at the line's
+//! speed, or all at once with [`SimConfig::burst`]. With [`SimConfig::keep_log`] it logs what a
 //! client must receive ([`AdBoxSim::sent`]): the button changes and the analog channels of
 //! each answer, with the time its first byte left.
 
@@ -33,16 +34,22 @@ pub struct SimConfig {
     pub reply_delay: Duration,
     /// Log what a client must receive.
     pub keep_log: bool,
+    /// Write each answer whole, when its first byte is due. On a pseudo-terminal the
+    /// simulator's thread can be descheduled for longer than the driver's 200 ms wait for a
+    /// byte (a loaded machine): paced bytes would then cut an answer in two, which a real
+    /// box never does, and the driver rightly drops it.
+    pub burst: bool,
 }
 
 impl SimConfig {
-    /// A 19-byte box at `baud`, answering after 3 ms, no log.
+    /// A 19-byte box at `baud`, answering after 3 ms, bytes paced, no log.
     pub fn new(baud: u32) -> SimConfig {
         SimConfig {
             baud,
             len: 19,
             reply_delay: Duration::from_millis(3),
             keep_log: false,
+            burst: false,
         }
     }
 }
@@ -134,7 +141,9 @@ impl AdBoxSim {
         let mut t = start;
         for &b in &a[..self.layout.len] {
             self.out.push_back((t, b));
-            t += self.byte_time();
+            if !self.cfg.burst {
+                t += self.byte_time();
+            }
         }
         self.line_free = Some(t);
         if !self.cfg.keep_log {
@@ -167,7 +176,8 @@ impl DeviceModel for AdBoxSim {
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
         while self.due.front().is_some_and(|&t| t <= now.mono) {
             let t = self.due.pop_front().unwrap_or(now.mono);
-            self.send_answer(t);
+            // Whole answers leave now: a late thread logs when they really left.
+            self.send_answer(if self.cfg.burst { now.mono } else { t });
         }
         while let Some(&(t, b)) = self.out.front() {
             if t > now.mono {
