@@ -175,7 +175,7 @@ impl ServerDevice for MagnetometerDevice {
 
     fn mainloop(&mut self, now: Now) {
         self.source.poll();
-        let Ok(mut st) = self.state.try_borrow_mut() else {
+        let Ok(st) = self.state.try_borrow_mut() else {
             return;
         };
         if !self.cadence.due(now.mono) {
