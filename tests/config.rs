@@ -281,7 +281,11 @@ fn sample_config_commented_examples_parse() {
             "vrpn_ImmersionBox",
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
+            "vrpn_raw_SGIBox",
             "vrpn_Button_Python",
+            "vrpn_Button_SerialMouse",
+            "vrpn_Button_SerialMouse",
+            "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
@@ -292,7 +296,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_IMU_Magnetometer",
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
-            "vrpn_Poser_Analog"
+            "vrpn_Poser_Analog",
+            "vrpn_JoyFly"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
