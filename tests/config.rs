@@ -229,6 +229,8 @@ fn sample_config_commented_examples_parse() {
                 .iter()
                 .any(|k| rest.starts_with(k))
                 || rest.ends_with(".rom")
+                // A layered device's lines naming its source device (IMU devices).
+                || rest.starts_with('*')
             {
                 uncommented.push_str(rest);
                 uncommented.push('\n');
