@@ -53,6 +53,7 @@ pub mod tng3;
 pub mod uncjoystick;
 pub mod wanda;
 pub mod xkeys;
+pub mod yei;
 pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -115,6 +116,7 @@ pub static REGISTRY: &[&Driver] = &[
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
     &wanda::DRIVER,
+    &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
@@ -137,4 +139,5 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &yei::sim::SIMULATOR,
 ];
