@@ -11,6 +11,7 @@
 use crate::driver::Driver;
 
 pub mod biosciences;
+pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
@@ -20,6 +21,7 @@ pub mod evdev;
 pub mod fastrak;
 pub mod flock;
 pub mod gamepads;
+pub mod gametrak;
 pub mod glove5dt;
 pub mod glove5dt16;
 pub mod glove5dt_usb;
@@ -39,6 +41,7 @@ pub mod inertiamouse;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
+pub mod nikon;
 pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
@@ -84,6 +87,8 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &gametrak::DRIVER,
+    &button_5dt_server::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -101,6 +106,7 @@ pub static REGISTRY: &[&Driver] = &[
     &joylin::DRIVER,
     &liberty::DRIVER,
     &magellan::DRIVER,
+    &nikon::DRIVER,
     &biosciences::DRIVER,
     &glove5dt16::DRIVER,
     &glove5dt::DRIVER,
@@ -139,5 +145,6 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &nikon::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
 ];

@@ -218,9 +218,16 @@ fn sample_config_commented_examples_parse() {
                 ]
                 .iter()
                 .any(|k| rest.starts_with(&format!("{k}\t")))
-                || ["absolute", "vel_scale", "Wand", "Stylus", "end"]
-                    .iter()
-                    .any(|k| rest.starts_with(k))
+                || [
+                    "absolute",
+                    "vel_scale",
+                    "Wand",
+                    "Stylus",
+                    "end",
+                    "axis_mapping",
+                ]
+                .iter()
+                .any(|k| rest.starts_with(k))
                 || rest.ends_with(".rom")
             {
                 uncommented.push_str(rest);
@@ -277,11 +284,14 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
             "vrpn_Button_Python",
+            "vrpn_nikon_controls",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
-            "vrpn_Tracker_FilterOneEuro"
+            "vrpn_Tracker_FilterOneEuro",
+            "vrpn_Tracker_GameTrak",
+            "vrpn_Button_5DT_Server"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

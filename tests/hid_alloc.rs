@@ -235,8 +235,9 @@ fn hid_and_evdev_devices_stream_without_allocating() {
         r.extend_from_slice(&k.to_le_bytes());
         r.extend_from_slice(&[0; 4]);
         ends[3].send_report(&r).unwrap();
-        let ev =
-            |kind, code, value| vrpn::hid::evdev::InputEvent { kind, code, value }.encode(0, 0);
+        let ev = |kind, code, value| {
+            vrpn::hid::input_event::InputEvent { kind, code, value }.encode(0, 0)
+        };
         let mut m = Vec::new();
         m.extend_from_slice(&ev(2, 0, k.into()));
         m.extend_from_slice(&ev(0, 0, 0));

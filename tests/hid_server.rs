@@ -137,7 +137,7 @@ fn waiting_plugged_unplugged_replugged() {
         pedal[round] = true;
         e2.send_report(&xkeys::sim::xk3(pedal)).unwrap();
         let ev = |kind: u16, code: u16, value: i32| {
-            vrpn::hid::evdev::InputEvent { kind, code, value }.encode(0, 0)
+            vrpn::hid::input_event::InputEvent { kind, code, value }.encode(0, 0)
         };
         kw.write_all(&[ev(1, 30 + round as u16, 1), ev(0, 0, 0)].concat())
             .unwrap();

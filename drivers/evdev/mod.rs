@@ -55,7 +55,7 @@ mod tests;
 pub use self::config::DRIVER;
 
 use crate::devices::ServerDevice;
-use crate::hid::evdev::{
+use crate::hid::input_event::{
     InputEvent, ABS_MAX, BTN_LEFT, BTN_MIDDLE, BTN_MOUSE, BTN_RIGHT, EV_ABS, EV_KEY, EV_REL,
     EV_SYN, REL_MAX, REL_WHEEL, REL_X, REL_Y,
 };
@@ -285,7 +285,7 @@ pub fn build(driver: EvdevDriver, conn: &Connection, hub: &DeviceHub) -> Box<dyn
 
 /// The `vrpn_DevInput` line that would serve `node`, by what its capabilities say it is.
 pub fn suggest(node: &crate::hid::NodeInfo) -> Option<String> {
-    use crate::hid::evdev::{BTN_GAMEPAD, BTN_JOYSTICK};
+    use crate::hid::input_event::{BTN_GAMEPAD, BTN_JOYSTICK};
     let i = node.input()?;
     let name = &i.name;
     if i.ev.has(EV_REL.into()) && i.rel.has(REL_X.into()) && i.key.has(BTN_LEFT.into()) {

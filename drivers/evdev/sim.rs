@@ -1,6 +1,6 @@
 //! Input-event sequences as the kernel writes them, for simulators and tests.
 
-use crate::hid::evdev::{InputEvent, EV_ABS, EV_KEY, EV_REL, EV_SYN};
+use crate::hid::input_event::{InputEvent, EV_ABS, EV_KEY, EV_REL, EV_SYN};
 
 /// One event.
 pub const fn ev(kind: u16, code: u16, value: i32) -> InputEvent {

@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use super::sim::{abs, bytes, key, rel, syn};
 use super::{build, DevInputKind, EvdevDriver, MOUSE_BUTTONS};
-use crate::hid::evdev::{BTN_LEFT, BTN_MIDDLE, BTN_RIGHT, REL_WHEEL, REL_X, REL_Y};
+use crate::hid::input_event::{BTN_LEFT, BTN_MIDDLE, BTN_RIGHT, REL_WHEEL, REL_X, REL_Y};
 use crate::hid::rig::Rig;
 use crate::{AnalogRemote, ButtonRemote};
 

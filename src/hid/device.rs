@@ -11,8 +11,8 @@ use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use super::driver::{HidDriver, HidMatch, HidOp, HidOps, NodeInfo, NodeKind};
-use super::evdev::{EventSource, EVENT_LEN};
 use super::hotplug::Hotplug;
+use super::input_event::{EventSource, EVENT_LEN};
 use super::source::ReportSource;
 use super::sysfs::{self, DeviceTree};
 use crate::connection::Connection;

@@ -5,7 +5,7 @@ use std::io;
 use std::path::Path;
 use std::time::Instant;
 
-use super::evdev::{BTN_LEFT, EV_KEY, EV_REL, REL_X, REL_Y};
+use super::input_event::{BTN_LEFT, EV_KEY, EV_REL, REL_X, REL_Y};
 use super::sysfs::{HidInfo, InputInfo};
 use crate::time::Now;
 
@@ -406,7 +406,7 @@ pub trait HidDriver {
 
     /// One input report from interface `interface`, exactly as hidraw returned it (the
     /// report id first when the device numbers its reports), read at `at`. From an evdev
-    /// node, one `input_event` record ([`super::evdev::InputEvent::decode`]).
+    /// node, one `input_event` record ([`super::input_event::InputEvent::decode`]).
     fn report(&mut self, interface: usize, report: &[u8], at: Now, ops: &mut HidOps);
 
     /// The answer to a [`HidOps::get_feature`].

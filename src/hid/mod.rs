@@ -18,10 +18,10 @@
 pub mod descriptor;
 pub mod device;
 pub mod driver;
-pub mod evdev;
 #[cfg(any(test, feature = "sim"))]
 pub mod fake;
 pub mod hotplug;
+pub mod input_event;
 pub mod ioctl;
 pub mod list;
 #[cfg(test)]

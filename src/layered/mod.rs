@@ -290,3 +290,18 @@ impl TrackerSource {
         }
     }
 }
+
+/// The records of a capture of C++ VRPN's output kept in `tests/fixtures/` (comment lines
+/// start with `#`): each line a tag and numbers.
+#[cfg(test)]
+pub(crate) fn fixture_records(text: &str) -> Vec<(&str, Vec<f64>)> {
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let mut t = l.split_whitespace();
+            let tag = t.next().unwrap_or("");
+            let nums = t.map(|v| v.parse::<f64>().expect("a number")).collect();
+            (tag, nums)
+        })
+        .collect()
+}

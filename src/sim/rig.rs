@@ -451,8 +451,12 @@ pub fn assert_run_of<T: PartialEq + Debug>(
 
 /// Asserts that the report times in `stamps` are the arrivals of their records' first bytes,
 /// against the moments the simulator wrote those bytes (`sent_at`, on the monotonic clock of
-/// `t0`): the median lag lies between −2 ms and `max_lag` / 5, and every lag between −50 ms and
-/// `max_lag`.
+/// `t0`): the median lag lies between −2 ms and `max_lag` / 5, no lag is below −50 ms, and at
+/// most one in twenty (at least one allowed) exceeds `max_lag`.
+///
+/// Those few are the reader starved on a loaded machine (CI runs many servers at once): the
+/// server did not run for a while, so the read's wake time is late for every byte it finds. A
+/// stamp taken at the wrong moment is late for every record and shows in the median.
 ///
 /// A stamp may come a little *before* its byte left: a read takes everything that arrived
 /// since the poll woke, and stamps it with the wake time, so on a loaded machine a record
@@ -480,15 +484,68 @@ pub fn assert_first_byte_stamps(
         .collect();
     for (i, lag) in lags.iter().enumerate() {
         assert!(
-            (-0.05..max_lag.as_secs_f64()).contains(lag),
-            "{what}: report {i} stamped {lag:.6} s after its first byte left the simulator"
+            *lag >= -0.05,
+            "{what}: report {i} stamped {:.6} s before its first byte left the simulator",
+            -lag
         );
     }
+    let late: Vec<(usize, f64)> = lags
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|&(_, lag)| lag >= max_lag.as_secs_f64())
+        .collect();
+    assert!(
+        late.len() <= (lags.len() / 20).max(1),
+        "{what}: {} of {} reports stamped more than {max_lag:?} after their first byte left the \
+         simulator (report, lag in s): {late:?}",
+        late.len(),
+        lags.len()
+    );
     lags.sort_by(f64::total_cmp);
     if let Some(&median) = lags.get(lags.len() / 2) {
         assert!(
             (-0.002..max_lag.as_secs_f64() / 5.0).contains(&median),
             "{what}: the median report is stamped {median:.6} s after its first byte left"
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::assert_first_byte_stamps;
+    use crate::{Now, TimeVal};
+    use std::time::{Duration, Instant};
+
+    /// 100 records 10 ms apart from `t0`, and stamps `lag(i)` seconds after each.
+    fn stamps(t0: Now, lag: impl Fn(usize) -> f64) -> (Vec<TimeVal>, Vec<Instant>) {
+        (0..100)
+            .map(|i| {
+                let at = t0.mono + Duration::from_millis(10 * i as u64);
+                let left = t0.wall.plus(at - t0.mono);
+                (left.plus_secs(lag(i)), at)
+            })
+            .unzip()
+    }
+
+    fn check(lag: impl Fn(usize) -> f64) -> bool {
+        let t0 = Now::read();
+        let (s, at) = stamps(t0, lag);
+        std::panic::catch_unwind(|| {
+            assert_first_byte_stamps(&s, &at, t0, Duration::from_millis(250), "test")
+        })
+        .is_ok()
+    }
+
+    #[test]
+    fn first_byte_stamps_pass_and_late_or_early_ones_fail() {
+        assert!(check(|_| 0.0002));
+        // A starved reader: a few reports late by most of a second.
+        assert!(check(|i| if i % 40 == 7 { 0.74 } else { 0.0002 }));
+        // Too many late ones, every one late (stamped at the end of a long record), or one
+        // stamped well before its byte left.
+        assert!(!check(|i| if i % 10 == 7 { 0.74 } else { 0.0002 }));
+        assert!(!check(|_| 0.06));
+        assert!(!check(|i| if i == 50 { -0.2 } else { 0.0002 }));
     }
 }
