@@ -15,6 +15,7 @@ pub mod button_5dt_server;
 pub mod cerealbox;
 pub mod controls;
 pub mod crossbow;
+pub mod dead_reckoning;
 pub mod dtrack;
 pub mod dyna;
 pub mod evdev;
@@ -46,14 +47,17 @@ pub mod one_euro;
 pub mod orb;
 pub mod pinchglove;
 pub mod polaris;
+pub mod poser_analog;
 pub mod python;
 pub mod radamec;
+pub mod serialmouse;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
+pub mod vpjoystick;
 pub mod wanda;
 pub mod xkeys;
 pub mod yei;
@@ -87,8 +91,10 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::ANALOG_FLY,
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
+    &dead_reckoning::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
+    &poser_analog::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -118,9 +124,11 @@ pub static REGISTRY: &[&Driver] = &[
     &polaris::DRIVER,
     &python::DRIVER,
     &radamec::DRIVER,
+    &serialmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
+    &vpjoystick::DRIVER,
     &wanda::DRIVER,
     &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
@@ -145,6 +153,8 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &flock::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
+    &serialmouse::sim::SIMULATOR,
+    &vpjoystick::sim::SIMULATOR,
     &nikon::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
 ];

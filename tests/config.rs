@@ -284,14 +284,19 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
             "vrpn_Button_Python",
+            "vrpn_Button_SerialMouse",
+            "vrpn_Button_SerialMouse",
+            "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_FilterOneEuro",
+            "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_Tracker_GameTrak",
-            "vrpn_Button_5DT_Server"
+            "vrpn_Button_5DT_Server",
+            "vrpn_Poser_Analog"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

@@ -268,3 +268,105 @@ fn glove_buttons_from_a_local_5dt16() {
     );
     assert!(compared >= 20, "{compared} changes compared");
 }
+
+#[test]
+fn analog_poser_drives_what_cxx_drives() {
+    use vrpn::devices::analog_output::AnalogOutputServer;
+    use vrpn::devices::poser::PoserRemote;
+    let fixture = records(include_str!("fixtures/cxx_poser_analog.txt"));
+    let conn = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+    let ao = AnalogOutputServer::new("AO", &conn, 8).unwrap();
+    let received: Rc<RefCell<Vec<Vec<f64>>>> = Rc::default();
+    let r = received.clone();
+    ao.on_request(move |v| r.borrow_mut().push(v.channel[..3].to_vec()));
+    let at = format!("AO@127.0.0.1:{}", conn.local_port().unwrap());
+    let cfg = format!(
+        "vrpn_Poser_Analog PA 1\n\
+         X {at} 0 0.5 2.0 -1 1.5\n\
+         Y {at} 2 -0.25 -3.0 -2 2\n\
+         Z {at} 1 0.0 0.1 0 100\n\
+         RX NULL 0 0.0 1.0 -10 10\n\
+         RY NULL 0 0.0 1.0 -10 10\n\
+         RZ NULL 0 0.0 1.0 -10 10\n"
+    );
+    let server = ServerProcess::start(SERVER.as_ref(), &cfg).unwrap();
+    let name = format!("PA@tcp://127.0.0.1:{}", server.port());
+    let poser = PoserRemote::new(&name).unwrap();
+    let tracker = TrackerRemote::new(&name).unwrap();
+    let heard = watch_poses(&tracker);
+    let h = heard.clone();
+    tracker.on_velocity(move |v| {
+        h.borrow_mut().push(vec![
+            v.sensor as f64,
+            v.vel.x,
+            v.vel.y,
+            v.vel.z,
+            v.vel_quat.i,
+            v.vel_quat.j,
+            v.vel_quat.k,
+            v.vel_quat.w,
+            v.vel_quat_dt,
+        ])
+    });
+    let (c, p, t) = (&conn, &poser, &tracker);
+    let all: [&dyn Fn(); 3] = [&|| drop(c.mainloop()), &|| drop(p.mainloop()), &|| {
+        drop(t.mainloop())
+    }];
+    pump_until(&all, "the connections", &server, || {
+        p.connection().connected() && t.connection().connected()
+    });
+    let (mut ao_want, mut tracker_want) = (0, 0);
+    for (tag, v) in &fixture {
+        match tag.as_str() {
+            "IN" => {
+                let time = TimeVal {
+                    sec: v[0] as i64,
+                    usec: v[1] as i64,
+                };
+                poser
+                    .request_pose(time, [v[2], v[3], v[4]], [v[5], v[6], v[7], v[8]])
+                    .unwrap();
+                ao_want += 3;
+                tracker_want += 1;
+            }
+            "INVEL" => {
+                let time = TimeVal { sec: 1, usec: 0 };
+                poser
+                    .request_pose_velocity(time, [v[0], v[1], v[2]], [v[3], v[4], v[5], v[6]], v[7])
+                    .unwrap();
+                tracker_want += 1;
+            }
+            _ => continue,
+        }
+        pump_until(&all, "the poser's outputs", &server, || {
+            received.borrow().len() >= ao_want && heard.borrow().len() >= tracker_want
+        });
+    }
+    let cxx_ao: Vec<Vec<f64>> = fixture
+        .iter()
+        .filter(|(t, _)| t == "AO")
+        .map(|(_, v)| v.clone())
+        .collect();
+    assert_eq!(*received.borrow(), cxx_ao, "the analog output's channels");
+    // Poses without their time (the server's clock), and velocities, as C++ sent them.
+    let cxx_tracker: Vec<Vec<f64>> = fixture
+        .iter()
+        .filter_map(|(t, v)| match t.as_str() {
+            "OUT" => Some([&v[..1], &v[3..]].concat()),
+            "VEL" => Some(v.clone()),
+            _ => None,
+        })
+        .collect();
+    let heard: Vec<Vec<f64>> = heard
+        .borrow()
+        .iter()
+        .map(|v| {
+            if v.len() == 10 {
+                [&v[..1], &v[3..]].concat()
+            } else {
+                v.clone()
+            }
+        })
+        .collect();
+    assert_eq!(heard, cxx_tracker, "the tracker's reports");
+}

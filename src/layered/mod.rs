@@ -131,6 +131,53 @@ pub fn quat_mult(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
     ]
 }
 
+/// quatlib's π.
+const Q_PI: f64 = std::f64::consts::PI;
+/// quatlib's `Q_EPSILON`.
+const Q_EPSILON: f64 = 1e-10;
+
+/// quatlib `q_normalize`.
+pub fn quat_normalize(q: &[f64; 4]) -> [f64; 4] {
+    let f = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    [q[0] * f, q[1] * f, q[2] * f, q[3] * f]
+}
+
+/// quatlib `q_slerp` from `start` to `end` by `t`, (x, y, z, w).
+pub fn quat_slerp(start: &[f64; 4], end: &[f64; 4], t: f64) -> [f64; 4] {
+    let mut s = *start;
+    let mut cos_omega = s[0] * end[0] + s[1] * end[1] + s[2] * end[2] + s[3] * end[3];
+    if cos_omega < 0.0 {
+        cos_omega *= -1.0;
+        for v in &mut s {
+            *v *= -1.0;
+        }
+    }
+    let mut dest = [0.0; 4];
+    if (1.0 + cos_omega) > Q_EPSILON {
+        let (start_scale, end_scale) = if (1.0 - cos_omega) > Q_EPSILON {
+            let omega = cos_omega.acos();
+            let sin_omega = omega.sin();
+            (
+                ((1.0 - t) * omega).sin() / sin_omega,
+                (t * omega).sin() / sin_omega,
+            )
+        } else {
+            (1.0 - t, t)
+        };
+        for i in 0..4 {
+            dest[i] = start_scale * s[i] + end_scale * end[i];
+        }
+    } else {
+        dest = [-s[1], s[0], -s[3], s[2]];
+        let start_scale = ((0.5 - t) * Q_PI).sin();
+        let end_scale = (t * Q_PI).sin();
+        for i in 0..3 {
+            dest[i] = start_scale * s[i] + end_scale * dest[i];
+        }
+    }
+    dest
+}
+
 /// quatlib `q_xyz_quat_invert`: the inverse of the transform (t, q).
 pub fn xyz_quat_invert(t: [f64; 3], q: [f64; 4]) -> ([f64; 3], [f64; 4]) {
     let qi = quat_invert(&q);

@@ -4,7 +4,7 @@
 
 use std::net::{Ipv4Addr, SocketAddrV4};
 
-use crate::wire::header::{encode_message, Header, HEADER_LEN};
+use crate::wire::header::{encode_message, patch_seq, Header, HEADER_LEN};
 use crate::wire::{MAX_UDP_DATAGRAM, MAX_UDP_INBOUND};
 
 /// Bytes waiting to go out on TCP. Grows only under backlog, up to `limit`.
@@ -66,6 +66,17 @@ impl TxBuffer {
         Ok(())
     }
 
+    /// Appends a message encoded once for every peer (see `Session::pack`), with this peer's
+    /// sequence number written over the encoded one.
+    #[inline]
+    pub(crate) fn push_encoded(&mut self, msg: &[u8], seq: u32) -> Result<(), Backlogged> {
+        self.make_room(msg.len())?;
+        let at = self.buf.len();
+        self.buf.extend_from_slice(msg);
+        patch_seq(&mut self.buf[at..], seq);
+        Ok(())
+    }
+
     /// Checks the limit for `n` more bytes and moves unsent bytes to the front when that
     /// avoids growing the buffer.
     fn make_room(&mut self, n: usize) -> Result<(), Backlogged> {
@@ -105,8 +116,31 @@ impl DatagramQueue {
     /// Appends a message, starting a new datagram when the current one is full.
     pub(crate) fn push_message(&mut self, h: &Header, payload: &[u8]) -> bool {
         let size = h.wire_size();
-        if size > MAX_UDP_DATAGRAM {
+        let Some(out) = self.reserve(size) else {
             return false;
+        };
+        encode_message(out, h, payload);
+        true
+    }
+
+    /// Appends a message encoded once for every peer (see `Session::pack`), with this peer's
+    /// sequence number written over the encoded one.
+    #[inline]
+    pub(crate) fn push_encoded(&mut self, msg: &[u8], seq: u32) -> bool {
+        let Some(out) = self.reserve(msg.len()) else {
+            return false;
+        };
+        out.copy_from_slice(msg);
+        patch_seq(out, seq);
+        true
+    }
+
+    /// Room for `size` more bytes at the end of the open datagram, or of a new one (dropping
+    /// the oldest when the ring is full); `None` for a message no datagram can hold.
+    #[inline]
+    fn reserve(&mut self, size: usize) -> Option<&mut [u8]> {
+        if size > MAX_UDP_DATAGRAM {
+            return None;
         }
         if self.slots.is_empty() {
             self.slots = vec![0; DATAGRAM_SLOTS * MAX_UDP_DATAGRAM];
@@ -126,9 +160,8 @@ impl DatagramQueue {
         }
         let t = self.tail_slot();
         let start = t * MAX_UDP_DATAGRAM + self.lens[t];
-        encode_message(&mut self.slots[start..start + size], h, payload);
         self.lens[t] += size;
-        true
+        Some(&mut self.slots[start..start + size])
     }
 
     /// No datagram waits.

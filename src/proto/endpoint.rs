@@ -10,8 +10,8 @@ use super::PeerId;
 use crate::log::LogWriter;
 use crate::time::TimeVal;
 use crate::wire::framing::StreamDecoder;
-use crate::wire::header::{Header, HEADER_LEN};
-use crate::wire::{class, padded_len, COOKIE_LEN, MAX_IDS, MAX_UDP_DATAGRAM};
+use crate::wire::header::Header;
+use crate::wire::{class, COOKIE_LEN, MAX_IDS, MAX_UDP_DATAGRAM};
 
 /// A log file sink as the session sees it: bytes out, nothing else.
 pub(crate) type LogSink = LogWriter<Box<dyn std::io::Write>>;
@@ -286,10 +286,6 @@ impl Endpoint {
         payload: &[u8],
         class_of_service: u32,
     ) -> Result<Channel, Backlogged> {
-        let reliable = class_of_service & class::RELIABLE != 0;
-        let use_udp = !reliable
-            && self.udp_ready
-            && HEADER_LEN + padded_len(payload.len()) <= MAX_UDP_DATAGRAM;
         let mut h = Header {
             payload_len: payload.len(),
             time,
@@ -297,23 +293,81 @@ impl Endpoint {
             type_id,
             seq: 0,
         };
-        if !use_udp && !reliable && self.tx.pending_len() > self.tx.limit / 2 {
+        match self.route(h.wire_size(), class_of_service) {
+            Channel::Udp => {
+                h.seq = self.next_seq_udp();
+                self.udp_tx.push_message(&h, payload);
+                Ok(Channel::Udp)
+            }
+            Channel::Tcp => {
+                h.seq = self.next_seq_tcp();
+                self.tx.push_message(&h, payload)?;
+                Ok(Channel::Tcp)
+            }
+            Channel::Discarded => Ok(Channel::Discarded),
+        }
+    }
+
+    /// Queues a whole encoded message (header, payload, padding: the same bytes for every
+    /// peer, because the ids in it are this side's) as [`pack`](Self::pack) would, writing
+    /// this peer's sequence number into its copy. One encoding then serves every peer.
+    #[inline]
+    pub(crate) fn pack_encoded(
+        &mut self,
+        msg: &[u8],
+        class_of_service: u32,
+    ) -> Result<Channel, Backlogged> {
+        if self.phase != Phase::Connected {
+            return Ok(Channel::Discarded);
+        }
+        match self.route(msg.len(), class_of_service) {
+            Channel::Udp => {
+                let seq = self.next_seq_udp();
+                self.udp_tx.push_encoded(msg, seq);
+                Ok(Channel::Udp)
+            }
+            Channel::Tcp => {
+                let seq = self.next_seq_tcp();
+                self.tx.push_encoded(msg, seq)?;
+                Ok(Channel::Tcp)
+            }
+            Channel::Discarded => Ok(Channel::Discarded),
+        }
+    }
+
+    /// The channel a message of `wire_size` bytes takes: UDP when it is unreliable, the UDP
+    /// channel is open and it fits a datagram; otherwise TCP, unless it is unreliable and the
+    /// peer is falling behind on TCP (then it is shed and counted).
+    #[inline]
+    fn route(&mut self, wire_size: usize, class_of_service: u32) -> Channel {
+        let reliable = class_of_service & class::RELIABLE != 0;
+        if reliable {
+            return Channel::Tcp;
+        }
+        if self.udp_ready && wire_size <= MAX_UDP_DATAGRAM {
+            return Channel::Udp;
+        }
+        if self.tx.pending_len() > self.tx.limit / 2 {
             // The peer is falling behind on TCP: shed unreliable traffic first, so the
             // reliable backlog limit is reached only by reliable messages.
             self.unreliable_dropped += 1;
-            return Ok(Channel::Discarded);
+            return Channel::Discarded;
         }
-        if use_udp {
-            h.seq = self.seq_udp;
-            self.seq_udp = self.seq_udp.wrapping_add(1);
-            self.udp_tx.push_message(&h, payload);
-            Ok(Channel::Udp)
-        } else {
-            h.seq = self.seq_tcp;
-            self.seq_tcp = self.seq_tcp.wrapping_add(1);
-            self.tx.push_message(&h, payload)?;
-            Ok(Channel::Tcp)
-        }
+        Channel::Tcp
+    }
+
+    #[inline]
+    fn next_seq_udp(&mut self) -> u32 {
+        let s = self.seq_udp;
+        self.seq_udp = s.wrapping_add(1);
+        s
+    }
+
+    #[inline]
+    fn next_seq_tcp(&mut self) -> u32 {
+        let s = self.seq_tcp;
+        self.seq_tcp = s.wrapping_add(1);
+        s
     }
 }
 
@@ -381,6 +435,68 @@ mod tests {
             .is_ok()
         {}
         assert!(ep.tx.pending_len() <= 1000);
+    }
+
+    /// A message encoded once and copied (`pack_encoded`, the fan-out path) leaves exactly the
+    /// bytes a per-peer encoding (`pack`) leaves, sequence numbers included, on both channels,
+    /// and sheds and counts the same way.
+    #[test]
+    fn encoded_once_copies_are_the_bytes_of_a_per_peer_encoding() {
+        use crate::wire::header::encode_message;
+        let time = TimeVal::new(1_795_309_382, 663_181);
+        let payloads: [&[u8]; 4] = [&[], &[7; 13], &[9; 64], &[3; 2000]];
+        for tcp_only in [false, true] {
+            let (mut a, mut b) = (ep(tcp_only, 1 << 20), ep(tcp_only, 1 << 20));
+            for e in [&mut a, &mut b] {
+                e.phase = Phase::Connected;
+                e.udp_ready = !tcp_only;
+                // Peers differ in how far their sequence numbers got.
+                e.seq_tcp = 5;
+                e.seq_udp = 0xFFFF_FFFE;
+            }
+            let mut encoded = vec![0xAA; 4096];
+            for round in 0..3 {
+                for (k, payload) in payloads.iter().enumerate() {
+                    for cos in [class::RELIABLE, class::LOW_LATENCY] {
+                        let (sender, type_id) = (k as i32, round - 1);
+                        let per_peer = a.pack(time, sender, type_id, payload, cos);
+                        let h = Header {
+                            payload_len: payload.len(),
+                            time,
+                            sender,
+                            type_id,
+                            seq: 0,
+                        };
+                        let n = encode_message(&mut encoded, &h, payload).unwrap();
+                        assert_eq!(b.pack_encoded(&encoded[..n], cos), per_peer);
+                    }
+                }
+            }
+            assert_eq!(a.tx.pending(), b.tx.pending());
+            assert!(!a.tx.pending().is_empty());
+            assert_eq!(a.udp_tx.len(), b.udp_tx.len());
+            assert!(a.udp_tx.iter().eq(b.udp_tx.iter()));
+            assert_eq!(a.udp_tx.is_empty(), tcp_only);
+            assert_eq!((a.seq_tcp, a.seq_udp), (b.seq_tcp, b.seq_udp));
+        }
+        // Unconnected: discarded; falling behind on TCP: unreliable shed and counted.
+        let mut c = ep(true, 1000);
+        let msg = [0u8; 88];
+        assert_eq!(
+            c.pack_encoded(&msg, class::RELIABLE),
+            Ok(Channel::Discarded)
+        );
+        c.phase = Phase::Connected;
+        for _ in 0..6 {
+            assert_eq!(c.pack_encoded(&msg, class::RELIABLE), Ok(Channel::Tcp));
+        }
+        assert_eq!(
+            c.pack_encoded(&msg, class::LOW_LATENCY),
+            Ok(Channel::Discarded)
+        );
+        assert_eq!(c.unreliable_dropped, 1);
+        while c.pack_encoded(&msg, class::RELIABLE).is_ok() {}
+        assert!(c.tx.pending_len() <= 1000);
     }
 
     #[test]

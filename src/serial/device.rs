@@ -293,11 +293,16 @@ impl<D: SerialDriver> SerialDevice<D> {
     }
 
     /// Reads everything waiting, handing it to the driver with the time the poll woke for it.
-    fn read_all(&mut self, now: Now) {
+    ///
+    /// With `even_if_not_woken` it also reads when the poll did not report the port readable
+    /// (stamped with `now`): before a deadline acts on silence, bytes that came while the
+    /// process was not running (a loaded machine) are taken first, so a device that spoke in
+    /// time is not treated as silent.
+    fn read_all(&mut self, now: Now, even_if_not_woken: bool) {
         let arrived = match (&self.reactor, self.token) {
             (Some(r), Some(t)) => {
                 let ready = r.take(t);
-                if !ready.readable {
+                if !ready.readable && !even_if_not_woken {
                     return;
                 }
                 ready.woke.unwrap_or(now)
@@ -347,7 +352,10 @@ impl<D: SerialDriver> ServerDevice for SerialDevice<D> {
             self.open(now);
         }
         if self.port.is_some() {
-            self.read_all(now);
+            self.read_all(now, false);
+        }
+        if self.port.is_some() && self.driver.next_deadline().is_some_and(|d| now.mono >= d) {
+            self.read_all(now, true);
         }
         if self.port.is_some() && self.driver.next_deadline().is_some_and(|d| now.mono >= d) {
             self.driver.poll(now, &mut self.ops);

@@ -405,6 +405,26 @@ pub fn runs_in<T: PartialEq>(got: &[T], sent: &[T], after: usize) -> Vec<usize> 
         .collect()
 }
 
+/// Where in `sent` (what the simulator logged) the records a client has not heard yet start:
+/// just after the most recent place, among the first `logged` records, where the last values
+/// the client heard (`heard`, up to four of them) stand in a row; `logged` when they stand
+/// nowhere, 0 when nothing was heard.
+///
+/// Marking "what was logged when the client's log was marked" is not enough on a loaded
+/// machine: a starved server can have many records on their way, and they arrive after the
+/// mark.
+pub fn resume_after<T: PartialEq>(heard: &[T], sent: &[T], logged: usize) -> usize {
+    let logged = logged.min(sent.len());
+    let tail = &heard[heard.len().saturating_sub(4)..];
+    if tail.is_empty() {
+        return 0;
+    }
+    (tail.len()..=logged)
+        .rev()
+        .find(|&end| sent[end - tail.len()..end] == *tail)
+        .unwrap_or(logged)
+}
+
 /// Asserts that `got` (what the client received) is one contiguous run of `sent` (what the
 /// simulator logged) at or after `after`, so nothing was lost, added, changed or reordered
 /// (the client may have joined mid-stream, and the last records may still be on their way).
@@ -451,18 +471,19 @@ pub fn assert_run_of<T: PartialEq + Debug>(
 
 /// Asserts that the report times in `stamps` are the arrivals of their records' first bytes,
 /// against the moments the simulator wrote those bytes (`sent_at`, on the monotonic clock of
-/// `t0`): the median lag lies between −2 ms and `max_lag` / 5, no lag is below −50 ms, and at
-/// most one in twenty (at least one allowed) exceeds `max_lag`.
+/// `t0`).
 ///
-/// Those few are the reader starved on a loaded machine (CI runs many servers at once): the
-/// server did not run for a while, so the read's wake time is late for every byte it finds. A
-/// stamp taken at the wrong moment is late for every record and shows in the median.
+/// Reports stamped with the same time came from one read (a read takes everything that
+/// arrived since the poll woke, and stamps it with the wake time): each such read counts once,
+/// with the lag of its first record. Over the reads, the median lag lies between −2 ms and
+/// `max_lag` / 5, and at most one in twenty (at least one allowed) exceeds `max_lag`: those
+/// are the reader starved on a loaded machine (CI runs many servers at once), which then finds
+/// a backlog. No report may be stamped more than 50 ms before its byte left. A stamp taken at
+/// the end of a record, or when it was decoded, is late for every read and shows in the
+/// median.
 ///
-/// A stamp may come a little *before* its byte left: a read takes everything that arrived
-/// since the poll woke, and stamps it with the wake time, so on a loaded machine a record
-/// whose first byte arrived between the wake and the read gets the earlier time. A stamp
-/// taken at the end of a record, or when it was decoded, shows as a lag of a record's
-/// transmission time or more.
+/// A stamp may come a little *before* its byte left: a record whose first byte arrived
+/// between the wake and the read gets the earlier time.
 pub fn assert_first_byte_stamps(
     stamps: &[TimeVal],
     sent_at: &[Instant],
@@ -474,7 +495,7 @@ pub fn assert_first_byte_stamps(
         sent_at.len() >= stamps.len(),
         "{what}: more stamps than records"
     );
-    let mut lags: Vec<f64> = stamps
+    let lags: Vec<f64> = stamps
         .iter()
         .zip(sent_at)
         .map(|(stamp, &at)| {
@@ -489,19 +510,26 @@ pub fn assert_first_byte_stamps(
             -lag
         );
     }
-    let late: Vec<(usize, f64)> = lags
+    // One lag per read: the first report of each run with the same stamp.
+    let reads: Vec<(usize, f64)> = lags
         .iter()
         .copied()
         .enumerate()
+        .filter(|&(i, _)| i == 0 || stamps[i] != stamps[i - 1])
+        .collect();
+    let late: Vec<(usize, f64)> = reads
+        .iter()
+        .copied()
         .filter(|&(_, lag)| lag >= max_lag.as_secs_f64())
         .collect();
     assert!(
-        late.len() <= (lags.len() / 20).max(1),
-        "{what}: {} of {} reports stamped more than {max_lag:?} after their first byte left the \
+        late.len() <= (reads.len() / 20).max(1),
+        "{what}: {} of {} reads stamped more than {max_lag:?} after their first byte left the \
          simulator (report, lag in s): {late:?}",
         late.len(),
-        lags.len()
+        reads.len()
     );
+    let mut lags: Vec<f64> = reads.iter().map(|&(_, lag)| lag).collect();
     lags.sort_by(f64::total_cmp);
     if let Some(&median) = lags.get(lags.len() / 2) {
         assert!(
@@ -513,7 +541,7 @@ pub fn assert_first_byte_stamps(
 
 #[cfg(test)]
 mod tests {
-    use super::assert_first_byte_stamps;
+    use super::{assert_first_byte_stamps, resume_after};
     use crate::{Now, TimeVal};
     use std::time::{Duration, Instant};
 
@@ -538,10 +566,26 @@ mod tests {
     }
 
     #[test]
+    fn records_still_on_their_way_are_found_after_the_last_heard() {
+        let sent = [1, 2, 3, 1, 2, 3, 4, 5, 6];
+        assert_eq!(resume_after(&[1, 2], &sent, 9), 5);
+        assert_eq!(resume_after(&[3, 1, 2], &sent, 9), 5);
+        assert_eq!(resume_after(&[1, 2], &sent, 4), 2);
+        assert_eq!(resume_after(&[7], &sent, 6), 6);
+        assert_eq!(resume_after::<i32>(&[], &sent, 6), 0);
+    }
+
+    #[test]
     fn first_byte_stamps_pass_and_late_or_early_ones_fail() {
         assert!(check(|_| 0.0002));
         // A starved reader: a few reports late by most of a second.
         assert!(check(|i| if i % 40 == 7 { 0.74 } else { 0.0002 }));
+        // A reader starved for 0.7 s finds 40 records and stamps them all with its wake time.
+        let t0 = Now::read();
+        let (mut s, at) = stamps(t0, |_| 0.0002);
+        let woke = s[30].plus_secs(0.7);
+        s[30..70].iter_mut().for_each(|t| *t = woke);
+        assert_first_byte_stamps(&s, &at, t0, Duration::from_millis(250), "starved");
         // Too many late ones, every one late (stamped at the end of a long record), or one
         // stamped well before its byte left.
         assert!(!check(|i| if i % 10 == 7 { 0.74 } else { 0.0002 }));

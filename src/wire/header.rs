@@ -14,6 +14,10 @@ use crate::time::TimeVal;
 /// Size of the header on the wire.
 pub const HEADER_LEN: usize = 24;
 
+/// Where the sequence number sits in an encoded header: the only header field that differs
+/// between the copies of one message sent to several peers.
+pub const SEQ_OFFSET: usize = 20;
+
 /// Rounds a length up to the 8-byte wire alignment.
 #[inline]
 pub const fn padded_len(n: usize) -> usize {
@@ -77,6 +81,12 @@ impl Header {
     }
 }
 
+/// Overwrites the sequence number of an encoded message (`msg` holds at least its header).
+#[inline]
+pub fn patch_seq(msg: &mut [u8], seq: u32) {
+    BigEndian::write_u32(&mut msg[SEQ_OFFSET..SEQ_OFFSET + 4], seq);
+}
+
 /// Writes a whole message (header, payload, zeroed padding) at the start of `out`.
 ///
 /// Returns the bytes written, or `None` when `out` is too small.
@@ -111,6 +121,15 @@ mod tests {
         assert_eq!(&buf[0..4], &[0, 0, 0, 37]);
         assert_eq!(&buf[37..40], &[0, 0, 0]);
         assert_eq!(Header::decode(&buf).unwrap(), h);
+        patch_seq(&mut buf, 0x0102_0304);
+        assert_eq!(
+            Header::decode(&buf).unwrap(),
+            Header {
+                seq: 0x0102_0304,
+                ..h
+            }
+        );
+        assert_eq!(&buf[24..37], b"\0\0\0\x09Tracker0\0");
     }
 
     #[test]

@@ -9,7 +9,9 @@ use std::fmt::Debug;
 use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, ServerProcess};
+use vrpn::sim::rig::{
+    assert_first_byte_stamps, assert_run_of, resume_after, Client, ServerProcess,
+};
 use vrpn::sim::{DeviceModel, SimulatedDevice};
 use vrpn::{Now, TrackerPose};
 
@@ -56,11 +58,12 @@ impl<M: DeviceModel + 'static, V: PartialEq + Debug> Rig<'_, M, V> {
         );
     }
 
-    /// Where in the log the records still to come start: the records logged so far, less
-    /// the few that may still be on their way to the client (a polled device always has one
-    /// in flight).
+    /// Where in the log the records still to come start: after the last ones the client
+    /// heard (a polled device always has one in flight; a starved server, many).
     fn logged_before(&self) -> usize {
-        (self.sent)(self.sim).0.len().saturating_sub(3)
+        let want = (self.sent)(self.sim).0;
+        let heard: Vec<V> = self.client.poses().iter().map(self.seen).collect();
+        resume_after(&heard, &want, want.len())
     }
 
     fn poses(&self) -> usize {

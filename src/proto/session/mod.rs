@@ -116,6 +116,9 @@ pub struct Session {
     pub(crate) io: VecDeque<IoRequest>,
     /// Payload of the last delivered message.
     pub(crate) scratch: PayloadBuf,
+    /// A message being packed, encoded once for all peers (empty for the in-process
+    /// connection, which has none).
+    pub(crate) encoded: Vec<u8>,
     /// Local ids newly learned from peers: to be described to every peer (the C++ echo).
     pub(crate) to_describe: Vec<(bool, i32)>,
     cursor: usize,
@@ -159,6 +162,10 @@ impl Session {
             Kind::Client(_) => ConnectionState::Connecting,
             Kind::Loopback | Kind::File(_) => ConnectionState::Connected,
         };
+        let encoded = match kind {
+            Kind::Loopback => Vec::new(),
+            _ => vec![0; wire::header::HEADER_LEN + wire::MAX_TCP_PADDED_PAYLOAD],
+        };
         Session {
             kind,
             names: Names::new(),
@@ -168,6 +175,7 @@ impl Session {
             queue: VecDeque::with_capacity(64),
             io: VecDeque::with_capacity(16),
             scratch: PayloadBuf::new(wire::MAX_TCP_PADDED_PAYLOAD),
+            encoded,
             to_describe: Vec::with_capacity(16),
             cursor: 0,
             connected: 0,

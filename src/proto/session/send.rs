@@ -2,7 +2,8 @@
 //! its channel and shedding policy, and dropping peers.
 
 use super::{Kind, Session};
-use crate::proto::endpoint::{Channel, Phase};
+use crate::proto::buffers::Backlogged;
+use crate::proto::endpoint::{Channel, Endpoint, Phase};
 use crate::proto::names::NameLimit;
 use std::collections::VecDeque;
 
@@ -10,6 +11,7 @@ use crate::proto::{
     ConnectionEvent, Delivery, DropReason, IoRequest, Notice, NoticeKind, PeerId, Severity,
 };
 use crate::time::{Now, TimeVal};
+use crate::wire::header::{encode_message, Header};
 use crate::wire::{class, system};
 
 impl Session {
@@ -131,20 +133,15 @@ impl Session {
         if p.id != to {
             return false;
         }
-        match p.pack(time, sender, type_id, payload, class_of_service) {
-            Err(_) => {
-                if backlogged.is_none() {
-                    *backlogged = Some(p.id);
-                }
-            }
-            Ok(Channel::Discarded) if p.unreliable_dropped == 1 => {
-                falling_behind(queue, &p.label, p.tx.pending_len());
-            }
-            Ok(_) => {}
-        }
+        let r = p.pack(time, sender, type_id, payload, class_of_service);
+        note_pack_result(r, p, backlogged, queue);
         backlogged.is_some()
     }
 
+    /// Queues a message to every connected peer. The message is encoded once and each peer
+    /// gets a copy of those bytes with its own sequence number: the ids in it are this side's,
+    /// so nothing else differs between peers (a server with 255 clients used to spend a third
+    /// of its time encoding every report 255 times).
     fn pack_to_peers(
         &mut self,
         time: TimeVal,
@@ -158,24 +155,34 @@ impl Session {
             peers,
             backlogged,
             queue,
+            encoded,
             ..
         } = self;
+        let h = Header {
+            payload_len: payload.len(),
+            time,
+            sender,
+            type_id,
+            seq: 0,
+        };
+        let Some(len) = encode_message(encoded, &h, payload) else {
+            // Only a payload past the wire's limit gets here (the in-process connection has no
+            // buffer, and no peers either); the peers' own checks decide what becomes of it.
+            for p in peers.iter_mut().flatten() {
+                if !(replay && p.id.slot == 0) {
+                    let r = p.pack(time, sender, type_id, payload, class_of_service);
+                    note_pack_result(r, p, backlogged, queue);
+                }
+            }
+            return;
+        };
+        let msg = &encoded[..len];
         for p in peers.iter_mut().flatten() {
             if replay && p.id.slot == 0 {
                 continue;
             }
-            match p.pack(time, sender, type_id, payload, class_of_service) {
-                Err(_) => {
-                    if backlogged.is_none() {
-                        *backlogged = Some(p.id);
-                    }
-                }
-                // Say so once per peer, when it first sheds unreliable traffic.
-                Ok(Channel::Discarded) if p.unreliable_dropped == 1 => {
-                    falling_behind(queue, &p.label, p.tx.pending_len());
-                }
-                Ok(_) => {}
-            }
+            let r = p.pack_encoded(msg, class_of_service);
+            note_pack_result(r, p, backlogged, queue);
         }
     }
 
@@ -262,6 +269,30 @@ impl Session {
             }
         }
         self.note_state();
+    }
+}
+
+/// Notes what packing for one peer came to: the first peer whose reliable backlog overflowed
+/// (dropped by [`Session::drop_backlogged`]), and a notice when a peer first sheds unreliable
+/// traffic.
+#[inline]
+fn note_pack_result(
+    r: Result<Channel, Backlogged>,
+    p: &Endpoint,
+    backlogged: &mut Option<PeerId>,
+    queue: &mut VecDeque<Delivery>,
+) {
+    match r {
+        Err(_) => {
+            if backlogged.is_none() {
+                *backlogged = Some(p.id);
+            }
+        }
+        // Say so once per peer, when it first sheds unreliable traffic.
+        Ok(Channel::Discarded) if p.unreliable_dropped == 1 => {
+            falling_behind(queue, &p.label, p.tx.pending_len());
+        }
+        Ok(_) => {}
     }
 }
 

@@ -1,0 +1,111 @@
+//! The Virtual Presence joystick end to end: the simulator on a pseudo-terminal, a
+//! `vrpn_server` child serving `vrpn_VPJoystick`, and a TCP client of its Button on
+//! 127.0.0.1: exact changes in order with first-byte stamps, garbage between messages,
+//! silence (nothing to reset), unplugging and reopening.
+
+use std::time::{Duration, Instant};
+
+use vrpn::driver::Interface;
+use vrpn::drivers::vpjoystick::sim::{expected, SimConfig, VpJoystickSim};
+use vrpn::sim::rig::{assert_first_byte_stamps, Client, Heard, ServerProcess};
+use vrpn::sim::SimulatedDevice;
+use vrpn::{Now, TimeVal};
+
+const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
+
+fn heard(client: &Client, from: usize) -> Vec<((usize, bool), TimeVal)> {
+    client
+        .reports_from(from)
+        .into_iter()
+        .filter_map(|h| match h {
+            Heard::Button {
+                button,
+                pressed,
+                time,
+            } => Some(((button, pressed), time)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The server joined the stream at some message `k`: what it reported is what a driver
+/// starting there must report, stamped with the messages' first bytes.
+fn check(sim: &SimulatedDevice<VpJoystickSim>, client: &Client, t0: Now) {
+    let log = sim.model(|m| m.sent().to_vec());
+    let got = heard(client, 0);
+    let values: Vec<(usize, bool)> = got.iter().map(|g| g.0).collect();
+    let fits = (0..log.len()).find_map(|k| {
+        let want = expected(&log[k..]);
+        let w: Vec<(usize, bool)> = want.iter().map(|&(b, p, _)| (b, p)).collect();
+        (w.len() >= values.len() && w[..values.len()] == values[..]).then_some((k, want))
+    });
+    let Some((k, want)) = fits else {
+        panic!(
+            "the {} changes received are not what the messages say from any start: {values:?}",
+            values.len()
+        );
+    };
+    let at: Vec<Instant> = want.iter().map(|c| log[k + c.2].first_byte).collect();
+    let stamps: Vec<TimeVal> = got.iter().map(|g| g.1).collect();
+    assert_first_byte_stamps(&stamps, &at, t0, Duration::from_millis(250), "VP joystick");
+}
+
+#[test]
+fn vp_joystick_through_vrpn_server_to_a_client() {
+    let sim = SimulatedDevice::start("vpjoystick", || {
+        let mut cfg = SimConfig::new(9600);
+        cfg.keep_log = true;
+        VpJoystickSim::new(cfg)
+    })
+    .unwrap();
+    let t0 = Now::read();
+    let line = format!(
+        "vrpn_VPJoystick VPJoystick0 {} 9600\n",
+        sim.path().display()
+    );
+    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
+    let client = Client::connect("VPJoystick0", server.port(), &[Interface::Button]).unwrap();
+    let count = |c: &Client, from: usize| heard(c, from).len();
+    client.wait_until(Duration::from_secs(10), "changes", &server, |c| {
+        count(c, 0) >= 200
+    });
+    check(&sim, &client, t0);
+    let junk: [&[u8]; 3] = [&[0x41], &[0x7F, 0x55], &[0x20]];
+    sim.inject_between_records(&junk);
+    client.wait_until(Duration::from_secs(5), "the garbage sent", &server, |_| {
+        sim.injected() == junk.len()
+    });
+    let have = count(&client, 0);
+    client.wait_until(
+        Duration::from_secs(5),
+        "changes after garbage",
+        &server,
+        |c| count(c, 0) >= have + 100,
+    );
+    check(&sim, &client, t0);
+    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
+    // Silence: no text, then changes again.
+    let from = client.len();
+    sim.set_mute(true);
+    client.pump_until(Duration::from_secs(3), |_| false);
+    assert_eq!(client.texts_from(from), Vec::<String>::new());
+    sim.set_mute(false);
+    client.wait_until(
+        Duration::from_secs(5),
+        "changes after silence",
+        &server,
+        |c| count(c, from) >= 100,
+    );
+    // Unplugged: reported, reopened, resumed.
+    let from = client.len();
+    sim.unplug();
+    client.wait_text(from, "failed", Duration::from_secs(3), &server);
+    sim.plug().unwrap();
+    client.wait_until(
+        Duration::from_secs(8),
+        "changes after plugging back",
+        &server,
+        |c| count(c, from) >= 100,
+    );
+    client.wait_text(from, "is open again", Duration::from_secs(1), &server);
+}
