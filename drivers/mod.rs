@@ -39,18 +39,20 @@ pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod inertiamouse;
+pub mod joyfly;
 pub mod joylin;
 pub mod liberty;
 pub mod magellan;
 pub mod nikon;
 pub mod one_euro;
 pub mod orb;
+pub mod parport_python;
 pub mod pinchglove;
 pub mod polaris;
 pub mod poser_analog;
-pub mod python;
 pub mod radamec;
 pub mod serialmouse;
+pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
@@ -95,6 +97,7 @@ pub static REGISTRY: &[&Driver] = &[
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
+    &joyfly::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -122,9 +125,10 @@ pub static REGISTRY: &[&Driver] = &[
     &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
-    &python::DRIVER,
+    &parport_python::DRIVER,
     &radamec::DRIVER,
     &serialmouse::DRIVER,
+    &sgibox::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
@@ -147,14 +151,73 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
+    &crossbow::sim::SIMULATOR,
     &dyna::sim::SIMULATOR,
     &fastrak::sim::SIMULATOR,
     &flock::sim::SIMULATOR,
+    &glove5dt::sim::SIMULATOR,
+    &glove5dt16::sim::SIMULATOR,
+    &gps::sim::SIMULATOR,
+    &immersionbox::sim::SIMULATOR,
+    &inertiamouse::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
+    &liberty::sim::SIMULATOR,
     &magellan::sim::SIMULATOR,
     &serialmouse::sim::SIMULATOR,
     &vpjoystick::sim::SIMULATOR,
     &nikon::sim::SIMULATOR,
+    &orb::sim::SIMULATOR,
+    &pinchglove::sim::SIMULATOR,
+    &radamec::sim::SIMULATOR,
+    &sgibox::sim::SIMULATOR,
+    &spaceball::sim::SIMULATOR,
+    &streaming_arduino::sim::SIMULATOR,
+    &threespace::sim::SIMULATOR,
+    &tng3::sim::SIMULATOR,
+    &uncjoystick::sim::SIMULATOR,
+    &wanda::sim::SIMULATOR,
+    &zaber::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
 ];
+
+#[cfg(all(test, feature = "sim"))]
+mod tests {
+    use super::SIMULATORS;
+    use crate::server::config::parse_str;
+
+    /// Every driver folder whose simulator is a serial device model is in the catalog of
+    /// `vrpn_device_sim`, under the folder's name, with a `vrpn.cfg` line that parses. (The
+    /// Polaris is not: its line is followed by the names of tool files that must exist.)
+    #[test]
+    fn every_serial_simulator_is_in_the_catalog() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("drivers");
+        let mut missing = Vec::new();
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let entry = entry.unwrap();
+            let Ok(text) = std::fs::read_to_string(entry.path().join("sim.rs")) else {
+                continue;
+            };
+            let name = entry.file_name().into_string().unwrap();
+            if text.contains("impl DeviceModel for")
+                && name != "polaris"
+                && !SIMULATORS.iter().any(|s| s.name == name)
+            {
+                missing.push(name);
+            }
+        }
+        assert!(missing.is_empty(), "not in SIMULATORS: {missing:?}");
+        for (i, s) in SIMULATORS.iter().enumerate() {
+            assert!(
+                SIMULATORS[..i].iter().all(|o| o.name != s.name),
+                "{} twice",
+                s.name
+            );
+            let line = format!("{}\n", s.config_line("/dev/ttyS0", s.baud));
+            let entries = parse_str(&line, "catalog.cfg")
+                .unwrap_or_else(|e| panic!("{}: {line}: {e}", s.name));
+            assert_eq!(entries.len(), 1, "{}", s.name);
+        }
+    }
+}

@@ -283,6 +283,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_ImmersionBox",
             "vrpn_Radamec_SPI",
             "vrpn_Tng3",
+            "vrpn_raw_SGIBox",
             "vrpn_Button_Python",
             "vrpn_Button_SerialMouse",
             "vrpn_Button_SerialMouse",
@@ -296,7 +297,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
-            "vrpn_Poser_Analog"
+            "vrpn_Poser_Analog",
+            "vrpn_JoyFly"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

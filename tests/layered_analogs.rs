@@ -119,7 +119,13 @@ fn start_tracker(
 
 /// Feeds a fixture's `IN` records to the upstream and checks that the client hears exactly
 /// the fixture's `OUT` records (C++'s output), in order. Returns how many values were compared.
-fn replay_tracker_fixture(fixture: &str, cfg: impl Fn(&str) -> String, name: &str) -> usize {
+/// With `restamp`, each expected report carries its input's time (where C++ stamps 0).
+fn replay_tracker_fixture(
+    fixture: &str,
+    cfg: impl Fn(&str) -> String,
+    name: &str,
+    restamp: bool,
+) -> usize {
     let mut up = Upstream::new();
     let (server, remote, heard) = start_tracker(&up, &cfg(&up.at()), name);
     let recs = records(fixture);
@@ -138,7 +144,13 @@ fn replay_tracker_fixture(fixture: &str, cfg: impl Fn(&str) -> String, name: &st
             recs[i + 1..]
                 .iter()
                 .take_while(|(t, _)| t != "IN")
-                .map(|(_, v)| v.clone()),
+                .map(|(_, o)| {
+                    let mut o = o.clone();
+                    if restamp {
+                        (o[1], o[2]) = (v[0], v[1]);
+                    }
+                    o
+                }),
         );
         let (c, r) = (&up.conn, &remote);
         pump_until(
@@ -168,6 +180,7 @@ fn gametrak_reports_what_cxx_reports() {
         include_str!("fixtures/cxx_gametrak.txt"),
         |src| format!("vrpn_Tracker_GameTrak GT {src}\naxis_mapping 1 0 2 4 3 5\n"),
         "GT",
+        false,
     );
     assert_eq!(compared, 120 * 10);
 }
@@ -313,7 +326,7 @@ fn analog_poser_drives_what_cxx_drives() {
         drop(t.mainloop())
     }];
     pump_until(&all, "the connections", &server, || {
-        p.connection().connected() && t.connection().connected()
+        c.connected_peers() >= 1 && p.connection().connected() && t.connection().connected()
     });
     let (mut ao_want, mut tracker_want) = (0, 0);
     for (tag, v) in &fixture {
@@ -369,4 +382,16 @@ fn analog_poser_drives_what_cxx_drives() {
         })
         .collect();
     assert_eq!(heard, cxx_tracker, "the tracker's reports");
+}
+
+#[test]
+fn joyfly_flies_as_cxx_flies() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/cxx_joyfly.cfg");
+    let compared = replay_tracker_fixture(
+        include_str!("fixtures/cxx_joyfly.txt"),
+        |src| format!("vrpn_JoyFly JF {src} {file}\n"),
+        "JF",
+        true,
+    );
+    assert_eq!(compared, 53 * 10);
 }

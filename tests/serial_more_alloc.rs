@@ -1,4 +1,4 @@
-//! The Radamec SPI, TNG-3 and UNC Python drivers report without allocating: a counting
+//! The Radamec SPI, TNG-3, raw SGI box and UNC Python drivers report without allocating: a counting
 //! global allocator around every driver call while the simulators stream through them (reads
 //! split at random points, garbage on the line), and around the Python box's samples while
 //! its buttons change and bounce.
@@ -9,9 +9,10 @@ use std::time::Duration;
 
 use vrpn::devices::ServerDevice;
 use vrpn::driver::{Lifecycle, Protocol};
-use vrpn::drivers::python::source::StatusSource;
-use vrpn::drivers::python::{PythonButtons, READS_PER_SAMPLE, SAMPLE_PERIOD};
+use vrpn::drivers::parport_python::source::StatusSource;
+use vrpn::drivers::parport_python::{PythonButtons, READS_PER_SAMPLE, SAMPLE_PERIOD};
 use vrpn::drivers::radamec::sim::{RadamecSim, SimConfig as RadamecConfig};
+use vrpn::drivers::sgibox::sim::{SgiSim, SimConfig as SgiConfig};
 use vrpn::drivers::tng3::sim::{SimConfig as Tng3Config, Tng3Sim};
 use vrpn::server::config::parse_one;
 use vrpn::sim::{DeviceModel, VirtualLine};
@@ -69,6 +70,21 @@ fn radamec_streams_without_allocating() {
     let sim = RadamecSim::new(RadamecConfig::new());
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 5);
     let (n, allocations) = stream(&mut line, &reports, &[0x01, 0xA1, 0x33], 5);
+    assert!(n >= 100, "{n} reports");
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+#[test]
+fn sgibox_streams_without_allocating() {
+    quiet_texts();
+    // Toggles too: their presses make Alerts and light commands.
+    let cfg: vrpn::drivers::sgibox::SgiBox = parse_one("vrpn_raw_SGIBox S0 /dev/ttyS0 0 1 2 3\n");
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("S0", &conn);
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let sim = SgiSim::new(SgiConfig::new());
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
+    let (n, allocations) = stream(&mut line, &reports, &[0x01, 0x45, 0xBF], 5);
     assert!(n >= 100, "{n} reports");
     assert_eq!(allocations, 0, "allocations while sending {n} reports");
 }

@@ -17,8 +17,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::READINGS;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `biosciences`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "biosciences",
+    about: "BiosciencesTools temperature controller: answers set-point commands and polls with known readings",
+    baud: 115200,
+    line: "vrpn_BiosciencesTools Bio0 {PATH} 37.0 37.0 0",
+    make: |_| Box::new(BioSim::new(SimConfig::new())),
+};
 
 /// How the simulated controller behaves.
 #[derive(Clone, Debug)]

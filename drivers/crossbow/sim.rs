@@ -13,8 +13,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::packet::Packet;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `crossbow`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "crossbow",
+    about: "Crossbow RGA300CA: answers the ping, serial and version, then every poll with known angles and accelerations",
+    baud: 38400,
+    line: "vrpn_Tracker_Crossbow Tracker0 {PATH} {BAUD} 2.0 100",
+    make: |baud| Box::new(CrossbowSim::new(SimConfig::new(baud))),
+};
 
 /// The serial number it reports.
 pub const SERIAL: u32 = 0x0102_03F4;

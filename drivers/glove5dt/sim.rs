@@ -20,8 +20,17 @@ use std::time::{Duration, Instant};
 
 use super::record::{CHANNELS, HEADER, WIRELESS_LEFT, WIRELESS_RIGHT};
 use super::{INFO, INFO_LEN, INIT, INIT_ANSWER, REQUEST, STREAM};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `glove5dt`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "glove5dt",
+    about: "5DT Data Glove 5: answers the reset and information requests, then streams (or answers polls with) known finger values",
+    baud: 19200,
+    line: "vrpn_5dt Glove0 {PATH} {BAUD} 2 1",
+    make: |baud| Box::new(GloveSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated glove behaves.
 #[derive(Clone, Debug)]

@@ -17,8 +17,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::packet::{CHANNELS, SENSORS};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `glove5dt16`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "glove5dt16",
+    about: "5DT Data Glove 16: streams known sensor values",
+    baud: 19200,
+    line: "vrpn_5dt16 Glove16 {PATH} {BAUD}",
+    make: |baud| Box::new(Glove16Sim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated glove behaves.
 #[derive(Clone, Debug)]

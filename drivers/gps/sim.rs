@@ -11,8 +11,17 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `gps`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "gps",
+    about: "NMEA GPS receiver: RMC, GGA and GSA sentences with known fixes",
+    baud: 4800,
+    line: "vrpn_Tracker_GPS Gps0 {PATH} {BAUD}",
+    make: |baud| Box::new(GpsSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated receiver behaves.
 #[derive(Clone, Debug)]

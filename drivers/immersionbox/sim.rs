@@ -21,8 +21,17 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `immersionbox`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "immersionbox",
+    about: "Immersion Interface Box: answers the handshake and identification, then streams known button states",
+    baud: 38400,
+    line: "vrpn_ImmersionBox ibox {PATH} {BAUD} 4 0 0",
+    make: |baud| Box::new(IboxSim::new(SimConfig::new(baud))),
+};
 
 /// The identification texts, for commands `C8` to `CE`.
 pub const IDENT: [&str; 7] = [

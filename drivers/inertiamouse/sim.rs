@@ -15,8 +15,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::{encode_data, Applied, MouseState, CHANNELS};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `inertiamouse`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "inertiamouse",
+    about: "Inertia mouse: streams known channel values and button changes",
+    baud: 115200,
+    line: "vrpn_inertiamouse Mouse0 {PATH} {BAUD}",
+    make: |baud| Box::new(InertiaSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated mouse behaves.
 #[derive(Clone, Debug)]

@@ -220,6 +220,23 @@ fn initial_state_is_learned_and_reported_once() {
 }
 
 #[test]
+fn a_slow_reader_loses_nothing() {
+    // A loaded machine reads late and takes several events at once: every value and change
+    // is reported, from the first (times aside: a slow read's events carry its wake time).
+    let mut r = rig(SimConfig::new(6, 12), |_| {}, 21);
+    r.line.read_lag = Duration::from_millis(12);
+    r.line.run_for(Duration::from_secs(2));
+    let (a, c) = expected(&r, 6, 12);
+    let values = |v: &[Channels]| v.iter().map(|m| m.1.clone()).collect::<Vec<_>>();
+    let changes = |v: &[Change]| v.iter().map(|m| (m.1, m.2)).collect::<Vec<_>>();
+    let (got_a, got_c) = (values(&r.analog.borrow()), changes(&r.changes.borrow()));
+    assert!(got_a.len() >= 295 && got_c.len() >= 95);
+    assert!(a.len() - got_a.len() <= 3 && c.len() - got_c.len() <= 3);
+    assert_eq!(got_a[..], values(&a)[..got_a.len()]);
+    assert_eq!(got_c[..], changes(&c)[..got_c.len()]);
+}
+
+#[test]
 fn live_events_arrive_exactly_with_their_times() {
     for seed in [3, 4] {
         let mut r = rig(SimConfig::new(6, 12), |_| {}, seed);

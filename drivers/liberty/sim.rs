@@ -25,8 +25,17 @@ use std::time::{Duration, Instant};
 
 use super::record::{encode, METRES_PER_INCH, RECORD_LEN};
 use super::reset::{CTRL_V, CTRL_Y, DEFAULT_WHOAMI_LEN};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `liberty`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "liberty",
+    about: "Polhemus Liberty: answers the reset and WhoAmI, then streams known binary records",
+    baud: 115200,
+    line: "vrpn_Tracker_Liberty Liberty {PATH} {BAUD}",
+    make: |baud| Box::new(LibertySim::new(SimConfig::new(Kind::Liberty, baud))),
+};
 
 /// Which tracker.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

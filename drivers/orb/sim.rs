@@ -13,8 +13,17 @@ use std::time::{Duration, Instant};
 use super::event::{
     DIALS, PRESS, RELEASE, RESET, RESET_ANSWER, REV_PER_TICK_BALL, REV_PER_TICK_WHEEL,
 };
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `orb`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "orb",
+    about: "Global Haptics Orb: answers the reset, then sends known button, rocker and dial events",
+    baud: 19200,
+    line: "vrpn_GlobalHapticsOrb Orb0 {PATH} {BAUD}",
+    make: |baud| Box::new(OrbSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated Orb behaves.
 #[derive(Clone, Debug)]

@@ -20,8 +20,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::message::{END, TEXT, TOUCH, TOUCH_TIMED};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `pinchglove`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "pinchglove",
+    about: "Fakespace Pinch Glove: answers the time-stamp command, then sends known touch messages",
+    baud: 9600,
+    line: "vrpn_Button_PinchGlove PinchGlove0 {PATH} {BAUD}",
+    make: |baud| Box::new(PinchSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated glove behaves.
 #[derive(Clone, Debug)]

@@ -18,8 +18,18 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::check_byte;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `radamec`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "radamec",
+    about:
+        "Radamec SPI camera head: answers the camera request, then streams known position blocks",
+    baud: 38400,
+    line: "vrpn_Radamec_SPI Analog0 {PATH} {BAUD}",
+    make: |_| Box::new(RadamecSim::new(SimConfig::new())),
+};
 
 /// How the simulated device behaves.
 #[derive(Clone, Debug)]

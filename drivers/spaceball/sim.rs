@@ -23,8 +23,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::packet::{kind, Length, AXES, BUTTONS, NULL_RADIUS};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `spaceball`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "spaceball",
+    about: "Spaceball 4000 FLX: sends known ball and key packets",
+    baud: 9600,
+    line: "vrpn_Spaceball Spaceball0 {PATH} {BAUD}",
+    make: |baud| Box::new(SpaceballSim::new(SimConfig::new(baud))),
+};
 
 /// Which Spaceball.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -16,8 +16,17 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `streaming_arduino`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "streaming_arduino",
+    about: "Streaming Arduino: boots, takes the channel count, then streams known analog lines",
+    baud: 115200,
+    line: "vrpn_Streaming_Arduino sa0 {PATH} 4 {BAUD}",
+    make: |baud| Box::new(ArduinoSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated Arduino behaves.
 #[derive(Clone, Debug)]

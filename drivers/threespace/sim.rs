@@ -25,8 +25,17 @@ use std::time::{Duration, Instant};
 
 use super::record::{data, pack, Model, RECORD_LEN};
 use super::reset::{status_len, CTRL_K, CTRL_Y};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `threespace`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "threespace",
+    about: "Polhemus 3SPACE: answers the reset and status, then streams known binary records",
+    baud: 19200,
+    line: "vrpn_Tracker_3Space Tracker0 {PATH} {BAUD}",
+    make: |baud| Box::new(ThreeSpaceSim::new(SimConfig::new(Model::ThreeSpace, baud))),
+};
 
 /// How the status request is answered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -16,8 +16,17 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `tng3`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "tng3",
+    about: "Mindtel TNG-3: streams known button and analog records",
+    baud: 19200,
+    line: "vrpn_Tng3 tng3name {PATH} 8 8",
+    make: |_| Box::new(Tng3Sim::new(SimConfig::new())),
+};
 
 /// How the simulated box behaves.
 #[derive(Clone, Debug)]

@@ -19,8 +19,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::{Pair, SCALE};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `uncjoystick`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "uncjoystick",
+    about: "UNC joystick box: answers the reset, then sends known stick, slider and button changes",
+    baud: 19200,
+    line: "vrpn_Joystick Joybox0 {PATH} {BAUD} 10.0",
+    make: |baud| Box::new(JoystickSim::new(SimConfig::new(baud))),
+};
 
 /// How the simulated box behaves.
 #[derive(Clone, Debug)]

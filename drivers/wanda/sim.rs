@@ -21,8 +21,17 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::record::{encode, INIT_MESSAGE, RECORD_LEN, YELLOW_DOWN};
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `wanda`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "wanda",
+    about: "Wanda: sends its init message, then known ball and button records (7 data bits)",
+    baud: 1200,
+    line: "vrpn_Wanda Wanda0 {PATH} {BAUD} 60.0",
+    make: |_| Box::new(WandaSim::new(SimConfig::new())),
+};
 
 /// How the simulated Wanda behaves.
 #[derive(Clone, Debug)]

@@ -111,7 +111,10 @@ impl Rig {
                 }
                 None => last_record.unwrap() + CENTRE_AFTER,
             };
-            assert_eq!(*time, self.arrival_wall(first), "{w:?}");
+            // A slow read's records all carry its wake time: values only.
+            if self.line.read_lag.is_zero() {
+                assert_eq!(*time, self.arrival_wall(first), "{w:?}");
+            }
         }
     }
 }
@@ -130,6 +133,16 @@ fn run_in_steps<D: SerialDriver, M: crate::sim::DeviceModel>(
         line.run_for(Duration::from_millis(1));
     }
     done(line)
+}
+
+#[test]
+fn a_slow_reader_loses_nothing() {
+    // A loaded machine reads late and takes several records at once: every report is made,
+    // from the first. (A lag well under the centring delay, which a late read may cross.)
+    let mut r = rig(21, |_| {});
+    r.line.read_lag = Duration::from_millis(4);
+    r.line.run_for(Duration::from_secs(5));
+    r.assert_exact();
 }
 
 #[test]

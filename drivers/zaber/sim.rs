@@ -18,8 +18,17 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, Simulator};
 use crate::time::Now;
+
+/// The simulator `vrpn_device_sim` runs as `zaber`.
+pub static SIMULATOR: Simulator = Simulator {
+    name: "zaber",
+    about: "Two Zaber linear stages: answer renumbering and position requests, and move when told",
+    baud: 9600,
+    line: "vrpn_Zaber Zaber0 {PATH}",
+    make: |_| Box::new(ZaberSim::new(SimConfig::new(2))),
+};
 
 /// How the simulated chain behaves.
 #[derive(Clone, Debug)]

@@ -11,8 +11,8 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use vrpn::driver::Interface;
-use vrpn::drivers::python::sim::{expected_changes, FakeParport, RELEASED};
-use vrpn::drivers::python::PythonButtons;
+use vrpn::drivers::parport_python::sim::{expected_changes, FakeParport, RELEASED};
+use vrpn::drivers::parport_python::PythonButtons;
 use vrpn::server::{ServerLoop, SleepPolicy};
 use vrpn::sim::rig::{assert_first_byte_stamps, Client, Heard};
 use vrpn::{Connection, Now, ServerDevice, TimeVal};
