@@ -38,6 +38,7 @@ pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
+pub mod imu_magnetometer;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -94,6 +95,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
+    &imu_magnetometer::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
