@@ -64,6 +64,7 @@ pub mod vpjoystick;
 pub mod wanda;
 pub mod wiimote_head;
 pub mod xkeys;
+pub mod yei;
 pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -137,6 +138,7 @@ pub static REGISTRY: &[&Driver] = &[
     &uncjoystick::DRIVER,
     &vpjoystick::DRIVER,
     &wanda::DRIVER,
+    &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
@@ -181,6 +183,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &uncjoystick::sim::SIMULATOR,
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
+    &yei::sim::SIMULATOR,
 ];
 
 #[cfg(all(test, feature = "sim"))]
