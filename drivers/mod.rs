@@ -63,7 +63,9 @@ pub mod tng3;
 pub mod uncjoystick;
 pub mod vpjoystick;
 pub mod wanda;
+pub mod wiimote_head;
 pub mod xkeys;
+pub mod yei;
 pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -100,6 +102,7 @@ pub static REGISTRY: &[&Driver] = &[
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
     &joyfly::DRIVER,
+    &wiimote_head::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
@@ -137,6 +140,7 @@ pub static REGISTRY: &[&Driver] = &[
     &uncjoystick::DRIVER,
     &vpjoystick::DRIVER,
     &wanda::DRIVER,
+    &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
@@ -182,6 +186,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &uncjoystick::sim::SIMULATOR,
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
+    &yei::sim::SIMULATOR,
 ];
 
 #[cfg(all(test, feature = "sim"))]
