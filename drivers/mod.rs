@@ -62,6 +62,7 @@ pub mod tng3;
 pub mod uncjoystick;
 pub mod vpjoystick;
 pub mod wanda;
+pub mod wiimote_head;
 pub mod xkeys;
 pub mod yei;
 pub mod zaber;
@@ -100,6 +101,7 @@ pub static REGISTRY: &[&Driver] = &[
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
     &joyfly::DRIVER,
+    &wiimote_head::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,

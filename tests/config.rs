@@ -301,7 +301,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
-            "vrpn_JoyFly"
+            "vrpn_JoyFly",
+            "vrpn_Tracker_WiimoteHead"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
