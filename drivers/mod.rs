@@ -11,6 +11,7 @@
 use crate::driver::Driver;
 
 pub mod adbox;
+pub mod atmel;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -109,6 +110,7 @@ pub static REGISTRY: &[&Driver] = &[
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &adbox::DRIVER,
+    &atmel::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -158,6 +160,7 @@ pub static REGISTRY: &[&Driver] = &[
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &adbox::sim::SIMULATOR,
+    &atmel::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,

@@ -292,6 +292,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_ADBox",
+            "vrpn_Atmel",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
