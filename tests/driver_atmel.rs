@@ -28,7 +28,7 @@ fn reports(client: &Client, from: usize) -> Vec<(Vec<f64>, TimeVal)> {
 
 /// Register `r`'s answers: values and when their first bytes left.
 fn answers(sim: &SimulatedDevice<AtmelSim>, r: usize) -> (Vec<f64>, Vec<Instant>) {
-    sim.model(|m| {
+    sim.model(move |m| {
         m.answered()
             .iter()
             .filter(|a| a.register == r)
@@ -58,18 +58,49 @@ impl Rig {
     }
 
     /// Reports from log index `from` on carry registers 0 and 1's answers one for one (and
-    /// are stamped with register 0's, the first of each cycle).
+    /// are stamped with register 0's, the first of each cycle). A loaded machine can hold
+    /// the simulator's thread past the driver's 150 ms wait: that read reports -21 (as C++)
+    /// and its late answer, logged by the simulator, is never heard. So each -21 may stand
+    /// for one logged answer; every other value must be the next answer, exactly.
     fn check(&self, from: usize) {
         let got = reports(&self.client, from);
         for r in [0, 1] {
             let (want, at) = answers(&self.sim, r);
             let values: Vec<f64> = got.iter().map(|(c, _)| c[r]).collect();
-            let runs = assert_run_of(&values, &want, 0, &format!("Atmel register {r}"));
-            if r == 0 {
+            let heard: Vec<usize> = (0..values.len()).filter(|&i| values[i] != -21.0).collect();
+            let failed = values.len() - heard.len();
+            assert!(
+                failed * 10 <= values.len(),
+                "register {r}: {failed} failed reads"
+            );
+            // Where the first heard values stand in the log, then each next one.
+            let head: Vec<f64> = heard.iter().take(4).map(|&i| values[i]).collect();
+            let runs = assert_run_of(&head, &want, 0, &format!("Atmel register {r}"));
+            let mut p = runs[0];
+            let mut matched = Vec::new();
+            let mut may_skip = 0;
+            for (i, &v) in values.iter().enumerate() {
+                if v == -21.0 {
+                    may_skip += 1;
+                    continue;
+                }
+                while want.get(p) != Some(&v) && may_skip > 0 {
+                    p += 1;
+                    may_skip -= 1;
+                }
+                assert_eq!(
+                    want.get(p),
+                    Some(&v),
+                    "register {r}: report {i} is not the next answer"
+                );
+                matched.push((i, p));
+                p += 1;
+            }
+            if r == 0 && failed == 0 {
                 let stamps: Vec<TimeVal> = got.iter().map(|(_, t)| *t).collect();
                 assert_first_byte_stamps(
                     &stamps,
-                    &at[runs[0]..],
+                    &at[matched[0].1..],
                     self.t0,
                     Duration::from_millis(250),
                     "Atmel",
