@@ -77,6 +77,9 @@ pub struct Answered {
     pub at: Instant,
 }
 
+/// An answer to send: when, its bytes, and the read it answers (register and value, to log).
+type Due = (Instant, [u8; 2], Option<(usize, u8)>);
+
 /// The simulated board. See the module documentation.
 pub struct AtmelSim {
     cfg: SimConfig,
@@ -84,8 +87,7 @@ pub struct AtmelSim {
     reads: [u64; MAX_REGISTER + 1],
     /// An address byte that may be a read or the start of a write, and when it came.
     pending: Option<(u8, Instant)>,
-    /// Answers to send: when, the bytes, and the read it answers (to log).
-    due: VecDeque<(Instant, [u8; 2], Option<(usize, u8)>)>,
+    due: VecDeque<Due>,
     out: VecDeque<(Instant, u8)>,
     line_free: Option<Instant>,
     last_out: Option<Instant>,
