@@ -265,6 +265,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_GPS",
             "vrpn_inertiamouse",
             "vrpn_GlobalHapticsOrb",
+            "vrpn_YEI_3Space_Sensor",
+            "vrpn_YEI_3Space_Sensor",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
@@ -289,6 +291,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_SerialMouse",
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
+            "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
@@ -300,7 +303,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
-            "vrpn_JoyFly"
+            "vrpn_JoyFly",
+            "vrpn_Tracker_WiimoteHead"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
