@@ -39,6 +39,7 @@ pub mod hmd;
 pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
+pub mod imu_magnetometer;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -63,6 +64,7 @@ pub mod uncjoystick;
 pub mod vpjoystick;
 pub mod wanda;
 pub mod xkeys;
+pub mod yei;
 pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -94,6 +96,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
+    &imu_magnetometer::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
@@ -135,6 +138,7 @@ pub static REGISTRY: &[&Driver] = &[
     &uncjoystick::DRIVER,
     &vpjoystick::DRIVER,
     &wanda::DRIVER,
+    &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
@@ -180,6 +184,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &uncjoystick::sim::SIMULATOR,
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
+    &yei::sim::SIMULATOR,
 ];
 
 #[cfg(all(test, feature = "sim"))]
