@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod adbox;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -63,6 +64,7 @@ pub mod tng3;
 pub mod uncjoystick;
 pub mod vpjoystick;
 pub mod wanda;
+pub mod wiimote_head;
 pub mod xkeys;
 pub mod yei;
 pub mod zaber;
@@ -101,11 +103,13 @@ pub static REGISTRY: &[&Driver] = &[
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
     &joyfly::DRIVER,
+    &wiimote_head::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
+    &adbox::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -155,6 +159,7 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &adbox::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,

@@ -292,6 +292,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_IDEA",
+            "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
@@ -302,7 +303,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
-            "vrpn_JoyFly"
+            "vrpn_JoyFly",
+            "vrpn_Tracker_WiimoteHead"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.
