@@ -70,7 +70,7 @@ static GLOBAL: Counting = Counting;
 
 /// What feeds the layered device.
 enum Upstream {
-    Analog(AnalogServer),
+    Analog(Box<AnalogServer>),
     Tracker(TrackerServer),
 }
 
@@ -155,7 +155,9 @@ fn stream(
     let mut upstream = if tracker_source {
         Upstream::Tracker(TrackerServer::new("Src", &upstream_conn, 1).unwrap())
     } else {
-        Upstream::Analog(AnalogServer::new("Src", &upstream_conn, 16).unwrap())
+        Upstream::Analog(Box::new(
+            AnalogServer::new("Src", &upstream_conn, 16).unwrap(),
+        ))
     };
     let source = if local {
         DeviceRef::Local("Src".into())
