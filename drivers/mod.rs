@@ -38,9 +38,11 @@ pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
+pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
+pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -99,6 +101,7 @@ pub static REGISTRY: &[&Driver] = &[
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
     &imu_magnetometer::DRIVER,
+    &imu_simple_combiner::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
@@ -118,6 +121,7 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &idea::DRIVER,
     &immersionbox::DRIVER,
     &inertiamouse::DRIVER,
     &joylin::DRIVER,
@@ -170,6 +174,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &glove5dt::sim::SIMULATOR,
     &glove5dt16::sim::SIMULATOR,
     &gps::sim::SIMULATOR,
+    &idea::sim::SIMULATOR,
     &immersionbox::sim::SIMULATOR,
     &inertiamouse::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
