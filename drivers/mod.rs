@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod adbox;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -107,6 +108,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::forward::relay::config::RELAY,
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
+    &adbox::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -155,6 +157,7 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &adbox::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,
