@@ -41,6 +41,7 @@ pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
+pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -100,6 +101,7 @@ pub static REGISTRY: &[&Driver] = &[
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
     &imu_magnetometer::DRIVER,
+    &imu_simple_combiner::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,

@@ -301,6 +301,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_FilterOneEuro",
             "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_IMU_Magnetometer",
+            "vrpn_IMU_SimpleCombiner",
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
