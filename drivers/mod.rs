@@ -56,6 +56,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod tek4662;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
@@ -121,6 +122,7 @@ pub static REGISTRY: &[&Driver] = &[
     &orb::DRIVER,
     &spaceball::DRIVER,
     &streaming_arduino::DRIVER,
+    &tek4662::DRIVER,
     &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
@@ -172,6 +174,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &tek4662::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,
     &uncjoystick::sim::SIMULATOR,
