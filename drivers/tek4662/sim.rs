@@ -7,7 +7,8 @@
 //! [`SimConfig::speed`], and `ESC A M` (GIN) is answered 1 ms after the moves before it are
 //! done, with the pen's position in seven bytes. With [`SimConfig::wander`] the joystick
 //! moves the pen before each answer to a place computed from the answer's number
-//! ([`wander_position`]). With [`SimConfig::keep_log`] it logs every answer ([`PlotterSim::sent`])
+//! ([`wander_position`]); `vrpn_device_sim` lets it wander until the host first moves the
+//! pen. With [`SimConfig::keep_log`] it logs every answer ([`PlotterSim::sent`])
 //! with the position in counts, the metres a client must receive, and the time the answer's
 //! first byte left.
 
@@ -20,13 +21,14 @@ use crate::time::Now;
 /// The simulator for `vrpn_device_sim`.
 pub static SIMULATOR: Simulator = Simulator {
     name: "tek4662",
-    about: "Tektronix 4662 plotter: moves its pen as told, answers position requests, \
-            its joystick wanders",
+    about: "Tektronix 4662 plotter: answers position requests, its joystick wanders until \
+            the host moves the pen",
     baud: 1200,
     line: "vrpn_Tek4662 Tek4662 {PATH} {BAUD}",
     make: |baud| {
         let mut cfg = SimConfig::new(baud);
         cfg.wander = true;
+        cfg.wander_until_moved = true;
         Box::new(PlotterSim::new(cfg))
     },
 };
@@ -42,6 +44,9 @@ pub struct SimConfig {
     pub speed: f64,
     /// The joystick moves the pen before each answer ([`wander_position`]).
     pub wander: bool,
+    /// The joystick stops wandering when the host first moves the pen (so that a client can
+    /// take the pen over from `vrpn_device_sim`).
+    pub wander_until_moved: bool,
     /// Log every answer.
     pub keep_log: bool,
 }
@@ -54,6 +59,7 @@ impl SimConfig {
             start: (1000, 500),
             speed: 0.57,
             wander: false,
+            wander_until_moved: false,
             keep_log: false,
         }
     }
@@ -281,6 +287,9 @@ impl PlotterSim {
             match cmd {
                 Command::Move(x, y) => {
                     self.moves += 1;
+                    if self.cfg.wander_until_moved {
+                        self.cfg.wander = false;
+                    }
                     let dx = f64::from(x) - f64::from(self.pen.0);
                     let dy = f64::from(y) - f64::from(self.pen.1);
                     let metres = dx.hypot(dy) * 0.381 / 4095.0;
