@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod adbox;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -38,6 +39,7 @@ pub mod hid_trackers;
 pub mod hmd;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
+pub mod imu_magnetometer;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -62,7 +64,9 @@ pub mod tng3;
 pub mod uncjoystick;
 pub mod vpjoystick;
 pub mod wanda;
+pub mod wiimote_head;
 pub mod xkeys;
+pub mod yei;
 pub mod zaber;
 
 /// For each USB or input device family: the `vrpn.cfg` line that would serve a node, if
@@ -94,15 +98,18 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::layered::config::BUTTON_FLY,
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
+    &imu_magnetometer::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
     &joyfly::DRIVER,
+    &wiimote_head::DRIVER,
     // Logging and relaying other servers' devices.
     &crate::devices::aux_logger::config::AUX_LOGGER,
     &crate::forward::relay::config::RELAY,
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
+    &adbox::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -135,6 +142,7 @@ pub static REGISTRY: &[&Driver] = &[
     &uncjoystick::DRIVER,
     &vpjoystick::DRIVER,
     &wanda::DRIVER,
+    &yei::DRIVER,
     // USB HID devices (hidraw) and Linux input devices (evdev).
     &spacemouse::DRIVER,
     &xkeys::DRIVER,
@@ -151,6 +159,7 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &adbox::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,
@@ -180,6 +189,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &uncjoystick::sim::SIMULATOR,
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
+    &yei::sim::SIMULATOR,
 ];
 
 #[cfg(all(test, feature = "sim"))]

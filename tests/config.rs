@@ -229,6 +229,8 @@ fn sample_config_commented_examples_parse() {
                 .iter()
                 .any(|k| rest.starts_with(k))
                 || rest.ends_with(".rom")
+                // A layered device's lines naming its source device (IMU devices).
+                || rest.starts_with('*')
             {
                 uncommented.push_str(rest);
                 uncommented.push('\n');
@@ -263,6 +265,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_GPS",
             "vrpn_inertiamouse",
             "vrpn_GlobalHapticsOrb",
+            "vrpn_YEI_3Space_Sensor",
+            "vrpn_YEI_3Space_Sensor",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
@@ -288,16 +292,19 @@ fn sample_config_commented_examples_parse() {
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_Tek4662",
+            "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_FilterOneEuro",
             "vrpn_Tracker_DeadReckoning_Rotation",
+            "vrpn_IMU_Magnetometer",
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
-            "vrpn_JoyFly"
+            "vrpn_JoyFly",
+            "vrpn_Tracker_WiimoteHead"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

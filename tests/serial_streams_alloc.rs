@@ -1,7 +1,7 @@
-//! Serial devices that stream (the Spaceball, the 5DT gloves, the Streaming Arduino, the
-//! Zaber, the BiosciencesTools, the Nikon) report without allocating: checked with a counting
-//! global allocator around every driver call while the simulators stream through them, with
-//! reads split at random points and damage on the line.
+//! Serial devices that stream (the Spaceball, the 5DT gloves, the Streaming Arduino) report
+//! without allocating: checked with a counting global allocator around every driver call
+//! while the simulators stream through them, with reads split at random points and damage on
+//! the line. (The Zaber, the BiosciencesTools and the Nikon: `serial_controls_alloc.rs`.)
 
 use std::cell::Cell;
 use std::rc::Rc;

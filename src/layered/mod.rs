@@ -22,6 +22,7 @@ use crate::time::TimeVal;
 pub mod analog_fly;
 pub mod button_fly;
 pub mod config;
+pub mod imu;
 
 pub use analog_fly::TrackerAnalogFly;
 pub use button_fly::TrackerButtonFly;
