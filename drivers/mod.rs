@@ -37,6 +37,7 @@ pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
+pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
@@ -117,6 +118,7 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &idea::DRIVER,
     &immersionbox::DRIVER,
     &inertiamouse::DRIVER,
     &joylin::DRIVER,
@@ -169,6 +171,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &glove5dt::sim::SIMULATOR,
     &glove5dt16::sim::SIMULATOR,
     &gps::sim::SIMULATOR,
+    &idea::sim::SIMULATOR,
     &immersionbox::sim::SIMULATOR,
     &inertiamouse::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,

@@ -292,6 +292,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
             "vrpn_Tek4662",
+            "vrpn_IDEA",
             "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
