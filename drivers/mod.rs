@@ -182,6 +182,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
+    &yei::sim::SIMULATOR_WIRELESS,
 ];
 
 #[cfg(all(test, feature = "sim"))]

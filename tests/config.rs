@@ -267,6 +267,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_GlobalHapticsOrb",
             "vrpn_YEI_3Space_Sensor",
             "vrpn_YEI_3Space_Sensor",
+            "vrpn_YEI_3Space_Sensor_Wireless",
+            "vrpn_YEI_3Space_Sensor_Wireless",
             "vrpn_Tracker_Flock",
             "vrpn_Tracker_Flock_Parallel",
             "vrpn_Magellan",
