@@ -257,6 +257,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_3Space",
             "vrpn_Tracker_Isotrak",
+            "vrpn_Tracker_3DMouse",
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
@@ -293,6 +294,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_SerialMouse",
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
+            "vrpn_IDEA",
+            "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
@@ -300,10 +303,12 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_FilterOneEuro",
             "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_IMU_Magnetometer",
+            "vrpn_IMU_SimpleCombiner",
             "vrpn_Tracker_GameTrak",
             "vrpn_Button_5DT_Server",
             "vrpn_Poser_Analog",
-            "vrpn_JoyFly"
+            "vrpn_JoyFly",
+            "vrpn_Tracker_WiimoteHead"
         ]
     );
     // The Fastrak examples' continuation lines are read as such.

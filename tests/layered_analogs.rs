@@ -395,3 +395,83 @@ fn joyfly_flies_as_cxx_flies() {
     );
     assert_eq!(compared, 53 * 10);
 }
+
+/// `v` without records equal to the one before (a tracker's periodic repeats of its last
+/// report).
+fn without_repeats(v: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for r in v {
+        if out.last() != Some(r) {
+            out.push(r.clone());
+        }
+    }
+    out
+}
+
+#[test]
+fn wiimote_head_tracks_as_cxx_tracks() {
+    let fixture = records(include_str!("fixtures/cxx_wiimote_head.txt"));
+    let mut up = Upstream::new();
+    let cfg = format!("vrpn_Tracker_WiimoteHead WH {} 4 0.25\n", up.at());
+    let (server, remote, heard) = start_tracker(&up, &cfg, "WH");
+    // Before any input: the start-up pose, 1 m in front of the camera, as C++.
+    let (c, r) = (&up.conn, &remote);
+    pump_until(
+        &[&|| drop(c.mainloop()), &|| drop(r.mainloop())],
+        "a report before any input",
+        &server,
+        || !heard.borrow().is_empty(),
+    );
+    for h in heard.borrow().iter() {
+        assert_eq!(h[3..], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], "{h:?}");
+    }
+    heard.borrow_mut().clear();
+    let first_in = fixture.iter().position(|(t, _)| t == "IN").unwrap();
+    let mut want: Vec<Vec<f64>> = Vec::new();
+    for (i, (tag, v)) in fixture.iter().enumerate().skip(first_in) {
+        if tag != "IN" {
+            continue;
+        }
+        let t = TimeVal {
+            sec: v[0] as i64,
+            usec: v[1] as i64,
+        };
+        up.send(t, &v[3..3 + v[2] as usize]);
+        want.extend(
+            fixture[i + 1..]
+                .iter()
+                .take_while(|(t, _)| t != "IN")
+                .map(|(_, o)| o.clone()),
+        );
+        let want_now = without_repeats(&want).len();
+        let (c, r) = (&up.conn, &remote);
+        pump_until(
+            &[&|| drop(c.mainloop()), &|| drop(r.mainloop())],
+            "the report of an input",
+            &server,
+            || without_repeats(&heard.borrow()).len() >= want_now,
+        );
+    }
+    // A periodic repeat (4 a second) of the last pose.
+    let last = heard.borrow().len();
+    let (c, r) = (&up.conn, &remote);
+    pump_until(
+        &[&|| drop(c.mainloop()), &|| drop(r.mainloop())],
+        "a periodic report",
+        &server,
+        || heard.borrow().len() > last,
+    );
+    let heard = heard.borrow();
+    assert_eq!(
+        heard.last(),
+        want.last(),
+        "the periodic report repeats the last"
+    );
+    // Periodic repeats fall wherever the server's clock puts them: compare without them.
+    let (heard, want) = (without_repeats(&heard), without_repeats(&want));
+    assert_eq!(heard.len(), 60, "one report per input");
+    assert_eq!(heard.len(), want.len(), "reports heard vs C++'s");
+    for (k, (h, w)) in heard.iter().zip(&want).enumerate() {
+        assert_eq!(h, w, "report {k}: heard {h:?}, C++ sent {w:?}");
+    }
+}
