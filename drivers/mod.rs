@@ -60,6 +60,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod threedmouse;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
@@ -139,6 +140,7 @@ pub static REGISTRY: &[&Driver] = &[
     &radamec::DRIVER,
     &serialmouse::DRIVER,
     &sgibox::DRIVER,
+    &threedmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
@@ -186,6 +188,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &threedmouse::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,
     &uncjoystick::sim::SIMULATOR,

@@ -257,6 +257,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_Fastrak",
             "vrpn_Tracker_3Space",
             "vrpn_Tracker_Isotrak",
+            "vrpn_Tracker_3DMouse",
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
             "vrpn_Tracker_Liberty",
