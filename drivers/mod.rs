@@ -42,6 +42,7 @@ pub mod imu_magnetometer;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
+pub mod jsonnet;
 pub mod liberty;
 pub mod magellan;
 pub mod nikon;
@@ -111,6 +112,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crossbow::DRIVER,
     &dyna::DRIVER,
     &dtrack::DRIVER,
+    &jsonnet::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
