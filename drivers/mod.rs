@@ -10,6 +10,7 @@
 
 use crate::driver::Driver;
 
+pub mod adbox;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -36,6 +37,7 @@ pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
+pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
@@ -108,6 +110,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crate::forward::relay::config::RELAY,
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
+    &adbox::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
@@ -116,6 +119,7 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &idea::DRIVER,
     &immersionbox::DRIVER,
     &inertiamouse::DRIVER,
     &joylin::DRIVER,
@@ -157,6 +161,7 @@ pub static REGISTRY: &[&Driver] = &[
 /// adds its `sim::SIMULATOR` here.
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
+    &adbox::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,
@@ -166,6 +171,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &glove5dt::sim::SIMULATOR,
     &glove5dt16::sim::SIMULATOR,
     &gps::sim::SIMULATOR,
+    &idea::sim::SIMULATOR,
     &immersionbox::sim::SIMULATOR,
     &inertiamouse::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,

@@ -291,6 +291,8 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_SerialMouse",
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
+            "vrpn_IDEA",
+            "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",

@@ -1,5 +1,5 @@
-//! The serial mouse's buttons, the VP joystick, the Nikon focus, the Zaber positioners and the
-//! BiosciencesTools controller report without allocating: a counting global allocator around every driver call
+//! The serial mouse's buttons, the VP joystick, the Nikon focus, the Zaber positioners, the
+//! IDEA stepper drive and the BiosciencesTools controller report without allocating: a counting global allocator around every driver call
 //! while the simulators stream through them (reads split at random points, garbage on the
 //! line), and, for the devices with an Analog_Output, while clients keep asking for moves
 //! and set points.
@@ -11,6 +11,7 @@ use std::time::Duration;
 use vrpn::devices::analog_output::AnalogOutputRemote;
 use vrpn::driver::{Lifecycle, Protocol};
 use vrpn::drivers::biosciences::sim::{BioSim, SimConfig as BioConfig};
+use vrpn::drivers::idea::sim::{IdeaSim, SimConfig as IdeaConfig};
 use vrpn::drivers::nikon::sim::{NikonSim, SimConfig as NikonConfig};
 use vrpn::drivers::serialmouse::packet::MouseType;
 use vrpn::drivers::serialmouse::sim::{SerialMouseSim, SimConfig as MouseConfig};
@@ -175,6 +176,38 @@ fn zaber_moves_without_allocating() {
     let (n, allocations, skipped) = stream(&mut line, &reports, &[9, 9, 9], 5, step, |_| {
         k += 1;
         out.request_change_channel_value(k % 2, f64::from(k * 311 - 2000))
+            .unwrap();
+    });
+    assert!(
+        n >= 80 && skipped > 0,
+        "{n} reports, {skipped} bytes skipped"
+    );
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+#[test]
+fn idea_moves_and_polls_without_allocating() {
+    quiet_texts();
+    let cfg: vrpn::drivers::idea::Idea = parse_one(
+        "vrpn_IDEA I0 /dev/ttyS0 3200 1200 2000 40000 100000 290 0 290 290 50 8 1 -1 0 0 0 0 \
+         50 0.5 -60.0\n",
+    );
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("I0", &conn);
+    let out = AnalogOutputRemote::on_connection("I0", &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let sim = IdeaSim::new(IdeaConfig::new());
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 12);
+    // A move asked for every 50 ms (the position and the inputs polled in turn all along),
+    // and the inputs pressed and released now and then.
+    let mut k = 0i32;
+    let step = Duration::from_millis(50);
+    let (n, allocations, skipped) = stream(&mut line, &reports, b"zz\r\n", 5, step, |line| {
+        k += 1;
+        if k % 7 == 0 {
+            line.device.set_inputs((k % 16) as u8 & 0b1110);
+        }
+        out.request_change_channel_value(0, f64::from(-100 - k * 37 % 300))
             .unwrap();
     });
     assert!(
