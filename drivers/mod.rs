@@ -41,6 +41,7 @@ pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
+pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -60,6 +61,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod threedmouse;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
@@ -100,6 +102,7 @@ pub static REGISTRY: &[&Driver] = &[
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
     &imu_magnetometer::DRIVER,
+    &imu_simple_combiner::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
@@ -139,6 +142,7 @@ pub static REGISTRY: &[&Driver] = &[
     &radamec::DRIVER,
     &serialmouse::DRIVER,
     &sgibox::DRIVER,
+    &threedmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
@@ -186,6 +190,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &threedmouse::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,
     &uncjoystick::sim::SIMULATOR,
