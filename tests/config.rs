@@ -300,6 +300,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
             "vrpn_Tracker_DTrack",
+            "vrpn_Tracker_JsonNet",
             "vrpn_Tracker_FilterOneEuro",
             "vrpn_Tracker_DeadReckoning_Rotation",
             "vrpn_IMU_Magnetometer",
