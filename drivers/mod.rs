@@ -45,6 +45,7 @@ pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
+pub mod jsonnet;
 pub mod liberty;
 pub mod magellan;
 pub mod nikon;
@@ -117,6 +118,7 @@ pub static REGISTRY: &[&Driver] = &[
     &crossbow::DRIVER,
     &dyna::DRIVER,
     &dtrack::DRIVER,
+    &jsonnet::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
@@ -195,6 +197,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
+    &yei::sim::SIMULATOR_WIRELESS,
 ];
 
 #[cfg(all(test, feature = "sim"))]
