@@ -61,6 +61,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod tek4662;
 pub mod threedmouse;
 pub mod threespace;
 pub mod tng3;
@@ -135,6 +136,7 @@ pub static REGISTRY: &[&Driver] = &[
     &orb::DRIVER,
     &spaceball::DRIVER,
     &streaming_arduino::DRIVER,
+    &tek4662::DRIVER,
     &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
@@ -190,6 +192,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &tek4662::sim::SIMULATOR,
     &threedmouse::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,

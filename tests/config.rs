@@ -294,6 +294,7 @@ fn sample_config_commented_examples_parse() {
             "vrpn_Button_SerialMouse",
             "vrpn_VPJoystick",
             "vrpn_nikon_controls",
+            "vrpn_Tek4662",
             "vrpn_IDEA",
             "vrpn_ADBox",
             "vrpn_Tracker_DTrack",
