@@ -99,14 +99,13 @@ struct EpollSide<S> {
 }
 
 impl<S: mio::event::Source> EpollSide<S> {
-    fn new(mut sock: S) -> EpollSide<S> {
+    /// `interest` as the library registers the same kind of socket: a TCP stream for reading
+    /// and writing, a UDP socket for reading only (a UDP socket registered for writing would
+    /// get a write-space event after every datagram it sends).
+    fn new(mut sock: S, interest: mio::Interest) -> EpollSide<S> {
         let poll = mio::Poll::new().unwrap();
         poll.registry()
-            .register(
-                &mut sock,
-                mio::Token(1),
-                mio::Interest::READABLE | mio::Interest::WRITABLE,
-            )
+            .register(&mut sock, mio::Token(1), interest)
             .unwrap();
         EpollSide {
             poll,
@@ -147,8 +146,9 @@ fn epoll_tcp() -> impl FnMut() {
         s.set_nodelay(true).unwrap();
         s.set_nonblocking(true).unwrap();
     }
-    let mut a = EpollSide::new(mio::net::TcpStream::from_std(a));
-    let mut b = EpollSide::new(mio::net::TcpStream::from_std(b));
+    let both = mio::Interest::READABLE | mio::Interest::WRITABLE;
+    let mut a = EpollSide::new(mio::net::TcpStream::from_std(a), both);
+    let mut b = EpollSide::new(mio::net::TcpStream::from_std(b), both);
     let msg = [7u8; 24];
     let mut buf = vec![0u8; 4096];
     move || {
@@ -192,8 +192,8 @@ fn epoll_udp() -> impl FnMut() {
     b.connect(a.local_addr().unwrap()).unwrap();
     a.set_nonblocking(true).unwrap();
     b.set_nonblocking(true).unwrap();
-    let mut a = EpollSide::new(mio::net::UdpSocket::from_std(a));
-    let mut b = EpollSide::new(mio::net::UdpSocket::from_std(b));
+    let mut a = EpollSide::new(mio::net::UdpSocket::from_std(a), mio::Interest::READABLE);
+    let mut b = EpollSide::new(mio::net::UdpSocket::from_std(b), mio::Interest::READABLE);
     let msg = [7u8; 24];
     let mut buf = [0u8; 64];
     move || {
