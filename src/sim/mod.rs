@@ -16,6 +16,8 @@
 //!
 //! docs/DRIVERS.md ("Adding a driver") shows them together.
 
+#[cfg(test)]
+pub(crate) mod analog_rig;
 mod catalog;
 mod line;
 mod pty;
