@@ -5,9 +5,7 @@
 
 use std::cell::Cell;
 use std::rc::Rc;
-use std::time::Duration;
 
-use vrpn::driver::Protocol;
 use vrpn::drivers::crossbow::sim::{CrossbowSim, SimConfig as CrossbowSimConfig};
 use vrpn::drivers::crossbow::Crossbow;
 use vrpn::drivers::gps::sim::{GpsSim, SimConfig as GpsSimConfig};
@@ -25,59 +23,19 @@ use vrpn::drivers::threedmouse::ThreeDMouse;
 use vrpn::drivers::threespace::record::Model;
 use vrpn::drivers::threespace::sim::{SimConfig as ThreeSpaceSimConfig, ThreeSpaceSim};
 use vrpn::drivers::threespace::ThreeSpace;
-use vrpn::serial::SerialDriver;
 use vrpn::server::config::parse_one;
-use vrpn::sim::{DeviceModel, VirtualLine};
+use vrpn::sim::VirtualLine;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote, TrackerRemote};
 
 #[path = "common/counted_driver.rs"]
 mod counted_driver;
 #[path = "common/streaming_alloc.rs"]
 mod streaming_alloc;
-use counted_driver::{start, Counted, COUNT};
-use streaming_alloc::{quiet_texts, Line};
-
-/// Streams through `driver` for 5 s after a warm-up with `noise` on the line; returns
-/// (allocations, reports).
-fn stream<D: SerialDriver, M: DeviceModel>(
-    line: &mut VirtualLine<Counted<D>, M>,
-    reports: &Rc<Cell<u64>>,
-    noise: &[u8],
-) -> (u64, u64) {
-    line.split_reads = true;
-    line.run_for(Duration::from_secs(2));
-    line.inject(noise);
-    line.run_for(Duration::from_millis(1500));
-    COUNT.with(|c| c.set(0));
-    let before = reports.get();
-    for _ in 0..5 {
-        line.run_for(Duration::from_secs(1));
-        line.inject(noise);
-    }
-    (COUNT.with(Cell::get), reports.get() - before)
-}
+use counted_driver::{start, Counted};
+use streaming_alloc::{assert_streamed_skipping, bump, quiet_texts, stream_after_warm_up};
 
 fn counter() -> Rc<Cell<u64>> {
     Rc::new(Cell::new(0))
-}
-
-/// A callback that adds one to `n` for each report.
-fn bump<T>(n: &Rc<Cell<u64>>) -> impl FnMut(&T) + 'static {
-    let n = n.clone();
-    move |_| n.set(n.get() + 1)
-}
-
-/// The checks after [`stream`]: at least `least` reports, at least `skipped` bytes of the
-/// noise skipped, and no allocation.
-fn assert_streamed<P: Protocol, M: DeviceModel>(
-    line: &Line<P, M>,
-    (allocations, reports): (u64, u64),
-    least: u64,
-    skipped: u64,
-) {
-    assert!(reports >= least, "{reports} reports");
-    assert!(line.driver.0.stats().skipped_bytes >= skipped);
-    assert_eq!(allocations, 0, "allocations while streaming");
 }
 
 #[test]
@@ -104,7 +62,8 @@ fn isotrak_and_3space_stream_without_allocating() {
         let mut sim = ThreeSpaceSimConfig::new(model, cfg.baud);
         sim.stations = vec![1, 2];
         let mut line = VirtualLine::new(Counted(driver), ThreeSpaceSim::new(sim), start(), 3);
-        let (allocations, reports) = stream(&mut line, &reports, &[0x01, 0x85, 0x02, 0x7F]);
+        let (allocations, reports) =
+            stream_after_warm_up(&mut line, &reports, &[0x01, 0x85, 0x02, 0x7F]);
         assert!(reports >= 295, "{model:?}: {reports} reports");
         assert!(line.driver.0.stats().skipped_bytes >= 20);
         assert_eq!(allocations, 0, "{model:?}: allocations while streaming");
@@ -126,8 +85,8 @@ fn liberty_streams_without_allocating() {
     let mut sim = LibertySimConfig::new(Kind::Liberty, cfg.baud);
     sim.stations = vec![1, 2];
     let mut line = VirtualLine::new(Counted(driver), LibertySim::new(sim), start(), 4);
-    let streamed = stream(&mut line, &reports, b"LYx\x02PA ");
-    assert_streamed(&line, streamed, 590, 20);
+    let streamed = stream_after_warm_up(&mut line, &reports, b"LYx\x02PA ");
+    assert_streamed_skipping(&line, streamed, 590, 20);
 }
 
 #[test]
@@ -152,10 +111,10 @@ fn polaris_streams_without_allocating() {
     let mut sim = PolarisSimConfig::new();
     sim.missing_every = Some(5);
     let mut line = VirtualLine::new(Counted(driver), PolarisSim::new(sim), start(), 5);
-    let streamed = stream(&mut line, &reports, b"01+0\r\x00");
+    let streamed = stream_after_warm_up(&mut line, &reports, b"01+0\r\x00");
     // 60 frames a second, two tools, one frame in five of each missing; a reply the noise
     // breaks costs the wait for the next TX.
-    assert_streamed(&line, streamed, 350, 20);
+    assert_streamed_skipping(&line, streamed, 350, 20);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -172,8 +131,8 @@ fn crossbow_streams_without_allocating() {
     tracker.on_velocity(bump(&reports));
     let sim = CrossbowSim::new(CrossbowSimConfig::new(cfg.baud));
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
-    let streamed = stream(&mut line, &reports, &[0xAA, 0x55, 0x01]);
-    assert_streamed(&line, streamed, 3 * 500, 10);
+    let streamed = stream_after_warm_up(&mut line, &reports, &[0xAA, 0x55, 0x01]);
+    assert_streamed_skipping(&line, streamed, 3 * 500, 10);
 }
 
 #[test]
@@ -189,9 +148,9 @@ fn threedmouse_streams_without_allocating() {
     buttons.on_change(bump(&reports));
     let sim = ThreeDMouseSim::new(ThreeDMouseSimConfig::new(cfg.baud));
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 8);
-    let streamed = stream(&mut line, &reports, &[0x01, 0xC5, 0x12]);
+    let streamed = stream_after_warm_up(&mut line, &reports, &[0x01, 0xC5, 0x12]);
     // About 85 records a second (16 bytes at 19200 baud, a 3 ms answer delay).
-    assert_streamed(&line, streamed, 350, 10);
+    assert_streamed_skipping(&line, streamed, 350, 10);
 }
 
 #[test]
@@ -206,9 +165,9 @@ fn gps_streams_without_allocating() {
     let mut sim = GpsSimConfig::new(cfg.baud);
     sim.no_fix_every = Some(4);
     let mut line = VirtualLine::new(Counted(driver), GpsSim::new(sim), start(), 7);
-    let streamed = stream(&mut line, &reports, b"$GPGGA,1*77\r\n$x");
+    let streamed = stream_after_warm_up(&mut line, &reports, b"$GPGGA,1*77\r\n$x");
     // Ten epochs a second, three in four with a fix.
-    assert_streamed(&line, streamed, 30, 20);
+    assert_streamed_skipping(&line, streamed, 30, 20);
 }
 
 #[test]
@@ -224,9 +183,9 @@ fn inertia_mouse_streams_without_allocating() {
     buttons.on_change(bump(&reports));
     let sim = InertiaSim::new(InertiaSimConfig::new(cfg.baud));
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 8);
-    let streamed = stream(&mut line, &reports, b"Dx\nBB");
+    let streamed = stream_after_warm_up(&mut line, &reports, b"Dx\nBB");
     // A record every 10 ms; most change a channel.
-    assert_streamed(&line, streamed, 300, 10);
+    assert_streamed_skipping(&line, streamed, 300, 10);
 }
 
 #[test]
@@ -244,7 +203,7 @@ fn orb_reports_without_allocating() {
     dials.on_update(bump(&reports));
     let sim = OrbSim::new(OrbSimConfig::new(cfg.baud));
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 9);
-    let streamed = stream(&mut line, &reports, &[0x41, 0x7F]);
+    let streamed = stream_after_warm_up(&mut line, &reports, &[0x41, 0x7F]);
     // An event every 5 ms.
-    assert_streamed(&line, streamed, 900, 10);
+    assert_streamed_skipping(&line, streamed, 900, 10);
 }
