@@ -221,10 +221,16 @@ impl Net {
             self.remote.mainloop().unwrap();
             std::thread::sleep(Duration::from_micros(200));
         }
+        // Unreliable messages keep to TCP for a while after the descriptions
+        // (Limits::udp_after_descriptions): the warm-up runs past that, so the measurement
+        // sees the steady state of the path under test.
+        let connected = Instant::now();
+        let hold = vrpn::Limits::default().udp_after_descriptions + Duration::from_millis(50);
         let mut i = 0;
         while self.poses.get() < 500
             || self.c2s.get() < 500
             || self.remote.ping_cycle().waiting_for_pong()
+            || connected.elapsed() < hold
         {
             assert!(start.elapsed() < Duration::from_secs(10), "warm-up stalled");
             self.step(i, c2s_class);

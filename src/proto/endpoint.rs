@@ -2,7 +2,7 @@
 //! here, and the deadline it must meet.
 
 use std::net::SocketAddrV4;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::buffers::{Backlogged, DatagramInbox, DatagramQueue, TxBuffer};
 use super::names::IdSet;
@@ -125,6 +125,9 @@ pub(crate) struct Endpoint {
     pub(crate) phase: Phase,
     /// The peer announced a UDP port and our outbound socket is connected to it.
     pub(crate) udp_ready: bool,
+    /// Unreliable messages keep to TCP until then: the peer may not have read the
+    /// descriptions sent just before (`Limits::udp_after_descriptions`).
+    pub(crate) udp_held_until: Option<Instant>,
     /// No UDP channel in either direction (TCP-only path).
     pub(crate) tcp_only: bool,
     /// The peer has described a type: its own sender table is complete (C++ describes every
@@ -203,6 +206,7 @@ impl Endpoint {
             tx: TxBuffer::new(1024, tx_limit),
             udp_tx: DatagramQueue::default(),
             udp_ready: false,
+            udp_held_until: None,
             senders: RemoteNames::default(),
             types: RemoteNames::default(),
             seq_tcp: 0,
@@ -344,7 +348,7 @@ impl Endpoint {
         if reliable {
             return Channel::Tcp;
         }
-        if self.udp_ready && wire_size <= MAX_UDP_DATAGRAM {
+        if self.udp_ready && self.udp_held_until.is_none() && wire_size <= MAX_UDP_DATAGRAM {
             return Channel::Udp;
         }
         if self.tx.pending_len() > self.tx.limit / 2 {
@@ -354,6 +358,14 @@ impl Endpoint {
             return Channel::Discarded;
         }
         Channel::Tcp
+    }
+
+    /// Keeps unreliable messages on TCP for `hold` from `now` (see `udp_held_until`).
+    pub(crate) fn hold_udp(&mut self, now: Instant, hold: Duration) {
+        if self.udp_ready && !hold.is_zero() {
+            let until = now + hold;
+            self.udp_held_until = Some(self.udp_held_until.map_or(until, |t| t.max(until)));
+        }
     }
 
     #[inline]
