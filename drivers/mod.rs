@@ -37,9 +37,11 @@ pub mod hid_pad;
 pub mod hid_quat;
 pub mod hid_trackers;
 pub mod hmd;
+pub mod idea;
 pub mod imager_stream_buffer;
 pub mod immersionbox;
 pub mod imu_magnetometer;
+pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
@@ -58,6 +60,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod threedmouse;
 pub mod threespace;
 pub mod tng3;
 pub mod uncjoystick;
@@ -98,6 +101,7 @@ pub static REGISTRY: &[&Driver] = &[
     &one_euro::DRIVER,
     &dead_reckoning::DRIVER,
     &imu_magnetometer::DRIVER,
+    &imu_simple_combiner::DRIVER,
     &gametrak::DRIVER,
     &button_5dt_server::DRIVER,
     &poser_analog::DRIVER,
@@ -116,6 +120,7 @@ pub static REGISTRY: &[&Driver] = &[
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
+    &idea::DRIVER,
     &immersionbox::DRIVER,
     &inertiamouse::DRIVER,
     &joylin::DRIVER,
@@ -135,6 +140,7 @@ pub static REGISTRY: &[&Driver] = &[
     &radamec::DRIVER,
     &serialmouse::DRIVER,
     &sgibox::DRIVER,
+    &threedmouse::DRIVER,
     &threespace::DRIVER,
     &tng3::DRIVER,
     &uncjoystick::DRIVER,
@@ -167,6 +173,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &glove5dt::sim::SIMULATOR,
     &glove5dt16::sim::SIMULATOR,
     &gps::sim::SIMULATOR,
+    &idea::sim::SIMULATOR,
     &immersionbox::sim::SIMULATOR,
     &inertiamouse::sim::SIMULATOR,
     &joylin::sim::SIMULATOR,
@@ -181,6 +188,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &threedmouse::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,
     &uncjoystick::sim::SIMULATOR,

@@ -6,12 +6,14 @@
 
 use std::time::{Duration, Instant};
 
-use vrpn::devices::analog_output::AnalogOutputRemote;
-use vrpn::driver::Interface;
 use vrpn::drivers::nikon::sim::{NikonSim, SimConfig};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
+
+#[path = "common/output_rig.rs"]
+mod output_rig;
+use output_rig::{Device, OutputRig};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -42,53 +44,6 @@ fn sent(sim: &SimulatedDevice<NikonSim>) -> (Vec<f64>, Vec<Instant>) {
     sim.model(|m| changes(m.sent().iter().map(|s| (s.focus as f64, s.at))))
 }
 
-struct Rig {
-    sim: SimulatedDevice<NikonSim>,
-    server: ServerProcess,
-    client: Client,
-    out: AnalogOutputRemote,
-    t0: Now,
-    moves: i32,
-}
-
-impl Rig {
-    /// Asks for `n` moves, each once the previous was reported.
-    fn moves(&mut self, n: usize) {
-        for _ in 0..n {
-            let k = self.moves;
-            self.moves += 1;
-            let heard = reports(&self.client, 0).0.len();
-            self.out
-                .request_change_channel_value(0, f64::from(k * 137 - 900))
-                .unwrap();
-            let out = &self.out;
-            self.client.wait_until(
-                Duration::from_secs(5),
-                "a move reported",
-                &self.server,
-                |c| {
-                    let _ = out.mainloop();
-                    reports(c, 0).0.len() > heard
-                },
-            );
-        }
-    }
-
-    /// Reports from log index `from` on are a run of the positions told from `after` on.
-    fn check(&self, from: usize, after: usize) {
-        let (want, at) = sent(&self.sim);
-        let (got, stamps) = reports(&self.client, from);
-        let runs = assert_run_of(&got, &want, after, "Nikon focus");
-        assert_first_byte_stamps(
-            &stamps,
-            &at[runs[0]..],
-            self.t0,
-            Duration::from_millis(250),
-            "Nikon",
-        );
-    }
-}
-
 #[test]
 fn nikon_focus_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("nikon", || {
@@ -97,20 +52,19 @@ fn nikon_focus_through_vrpn_server_to_a_client() {
         NikonSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!("vrpn_nikon_controls Nikon0 {}\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect("Nikon0", server.port(), &[Interface::Analog]).unwrap();
-    let out =
-        AnalogOutputRemote::new(&format!("Nikon0@tcp://127.0.0.1:{}", server.port())).unwrap();
-    let mut r = Rig {
-        sim,
-        server,
-        client,
-        out,
-        t0,
-        moves: 0,
+    let device = Device {
+        what: "Nikon focus",
+        reports,
+        sent,
+        request: |k| (0, f64::from(k * 137 - 900)),
     };
+    let mut r = OutputRig::start(
+        sim,
+        SERVER,
+        "vrpn_nikon_controls Nikon0 {PATH}\n",
+        "Nikon0",
+        device,
+    );
 
     // 1. Start-up: the focus; then moves.
     r.client
@@ -120,7 +74,7 @@ fn nikon_focus_through_vrpn_server_to_a_client() {
     let (first, stamps) = reports(&r.client, 0);
     eprintln!(
         "Nikon: vrpn_server start to the focus {:.0} ms",
-        stamps[0].seconds_since(t0.wall) * 1e3
+        stamps[0].seconds_since(r.t0.wall) * 1e3
     );
     assert_eq!(first[0], 1234.0);
     r.client
@@ -144,28 +98,8 @@ fn nikon_focus_through_vrpn_server_to_a_client() {
         .wait_text(0, "skipped", Duration::from_secs(2), &r.server);
 
     // 3. Silence: polled, then reset on the open port after 10 s; moves again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.set_mute(true);
-    r.client
-        .wait_text(from, "Timeout...", Duration::from_secs(13), &r.server);
-    r.sim.set_mute(false);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(10);
-    r.check(after_reset, logged);
+    r.silence_and_move("Timeout...", Duration::from_secs(13), 10);
 
     // 4. Unplugged: reported, reopened when back, reset, moves again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.unplug();
-    r.client
-        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
-    r.sim.plug().unwrap();
-    r.client
-        .wait_text(from, "is open again", Duration::from_secs(6), &r.server);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(10);
-    r.check(after_reset, logged);
+    r.unplug_and_move(10);
 }

@@ -11,12 +11,14 @@
 
 use std::time::{Duration, Instant};
 
-use vrpn::devices::analog_output::AnalogOutputRemote;
-use vrpn::driver::Interface;
 use vrpn::drivers::zaber::sim::{SimConfig, ZaberSim};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
+
+#[path = "common/output_rig.rs"]
+mod output_rig;
+use output_rig::{Device, OutputRig};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -40,53 +42,6 @@ fn sent(sim: &SimulatedDevice<ZaberSim>) -> (Vec<Vec<f64>>, Vec<Instant>) {
     })
 }
 
-struct Rig {
-    sim: SimulatedDevice<ZaberSim>,
-    server: ServerProcess,
-    client: Client,
-    out: AnalogOutputRemote,
-    t0: Now,
-    moves: i32,
-}
-
-impl Rig {
-    /// Asks for `n` moves, alternating the devices, each once the previous was reported.
-    fn moves(&mut self, n: usize) {
-        for _ in 0..n {
-            let k = self.moves;
-            self.moves += 1;
-            let heard = reports(&self.client, 0).0.len();
-            self.out
-                .request_change_channel_value(k % 2, f64::from(k * 311 - 2000))
-                .unwrap();
-            let out = &self.out;
-            self.client.wait_until(
-                Duration::from_secs(5),
-                "a move reported",
-                &self.server,
-                |c| {
-                    let _ = out.mainloop();
-                    reports(c, 0).0.len() > heard
-                },
-            );
-        }
-    }
-
-    /// Reports from log index `from` on are a run of the moves logged from `after` on.
-    fn check(&self, from: usize, after: usize) {
-        let (want, at) = sent(&self.sim);
-        let (got, stamps) = reports(&self.client, from);
-        let runs = assert_run_of(&got, &want, after, "Zaber moves");
-        assert_first_byte_stamps(
-            &stamps,
-            &at[runs[0]..],
-            self.t0,
-            Duration::from_millis(250),
-            "Zaber",
-        );
-    }
-}
-
 #[test]
 fn zaber_chain_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("zaber", || {
@@ -95,20 +50,14 @@ fn zaber_chain_through_vrpn_server_to_a_client() {
         ZaberSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!("vrpn_Zaber Zaber0 {}\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect("Zaber0", server.port(), &[Interface::Analog]).unwrap();
-    let out =
-        AnalogOutputRemote::new(&format!("Zaber0@tcp://127.0.0.1:{}", server.port())).unwrap();
-    let mut r = Rig {
-        sim,
-        server,
-        client,
-        out,
-        t0,
-        moves: 0,
+    let device = Device {
+        what: "Zaber moves",
+        reports,
+        sent,
+        // Alternating the devices.
+        request: |k| (k % 2, f64::from(k * 311 - 2000)),
     };
+    let mut r = OutputRig::start(sim, SERVER, "vrpn_Zaber Zaber0 {PATH}\n", "Zaber0", device);
 
     // 1. Start-up: the positions; then moves.
     r.client
@@ -118,7 +67,7 @@ fn zaber_chain_through_vrpn_server_to_a_client() {
     let (first, stamps) = reports(&r.client, 0);
     eprintln!(
         "Zaber: vrpn_server start to the positions {:.0} ms",
-        stamps[0].seconds_since(t0.wall) * 1e3
+        stamps[0].seconds_since(r.t0.wall) * 1e3
     );
     assert_eq!(first[0], [1000.0, 2000.0]);
     r.client
@@ -142,37 +91,12 @@ fn zaber_chain_through_vrpn_server_to_a_client() {
         .wait_text(0, "skipped", Duration::from_secs(2), &r.server);
 
     // 3. Silence: reset on the open port, then moves again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.set_mute(true);
-    r.client.wait_text(
-        from,
+    r.silence_and_move(
         "Tracker failed, trying to reset",
         Duration::from_secs(5),
-        &r.server,
+        10,
     );
-    r.sim.set_mute(false);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(10);
-    r.check(after_reset, logged);
-    assert!(!r
-        .client
-        .texts_from(from)
-        .iter()
-        .any(|t| t.contains("is open again")));
 
     // 4. Unplugged: reported, reopened when back, reset, moves again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.unplug();
-    r.client
-        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
-    r.sim.plug().unwrap();
-    r.client
-        .wait_text(from, "is open again", Duration::from_secs(6), &r.server);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(10);
-    r.check(after_reset, logged);
+    r.unplug_and_move(10);
 }

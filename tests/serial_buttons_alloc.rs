@@ -3,59 +3,22 @@
 //! stream through them, with reads split at random points and garbage on the line.
 
 use std::cell::Cell;
-use std::rc::Rc;
 use std::time::Duration;
 
-use vrpn::driver::{Lifecycle, Protocol};
 use vrpn::drivers::immersionbox::sim::{IboxSim, SimConfig as IboxConfig};
 use vrpn::drivers::pinchglove::sim::{PinchSim, SimConfig as PinchConfig};
 use vrpn::drivers::uncjoystick::sim::{JoystickSim, SimConfig as JoyConfig};
 use vrpn::drivers::wanda::sim::{SimConfig as WandaConfig, WandaSim};
 use vrpn::server::config::parse_one;
-use vrpn::sim::{DeviceModel, VirtualLine};
-use vrpn::{AnalogRemote, ButtonRemote, Connection};
+use vrpn::sim::VirtualLine;
+use vrpn::Connection;
 
 #[path = "common/counted_driver.rs"]
 mod counted_driver;
+#[path = "common/streaming_alloc.rs"]
+mod streaming_alloc;
 use counted_driver::{start, Counted, COUNT};
-
-/// Counts every Analog and Button report `name` sends on `conn`.
-fn count_reports(name: &str, conn: &Connection) -> (Rc<Cell<u64>>, AnalogRemote, ButtonRemote) {
-    let n = Rc::new(Cell::new(0u64));
-    let analog = AnalogRemote::on_connection(name, conn).unwrap();
-    let buttons = ButtonRemote::on_connection(name, conn).unwrap();
-    let (a, b) = (n.clone(), n.clone());
-    analog.on_report(move |_| a.set(a.get() + 1));
-    buttons.on_change(move |_| b.set(b.get() + 1));
-    (n, analog, buttons)
-}
-
-/// Streams `seconds` with `noise` on the line once a second, after a warm-up with the same
-/// noise, and returns (reports, allocations) of the counted part.
-fn stream<P: Protocol, M: DeviceModel>(
-    line: &mut VirtualLine<Counted<Lifecycle<P>>, M>,
-    reports: &Cell<u64>,
-    noise: &[u8],
-    seconds: u32,
-) -> (u64, u64) {
-    line.split_reads = true;
-    line.run_for(Duration::from_millis(700));
-    assert!(line.driver.0.is_streaming());
-    line.inject(noise);
-    line.run_for(Duration::from_millis(1500));
-    COUNT.with(|c| c.set(0));
-    let before = reports.get();
-    for _ in 0..seconds {
-        line.run_for(Duration::from_secs(1));
-        line.inject(noise);
-    }
-    assert!(line.driver.0.stats().skipped_bytes > 0);
-    (reports.get() - before, COUNT.with(Cell::get))
-}
-
-fn quiet_texts() {
-    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
-}
+use streaming_alloc::{count_reports, quiet_texts, stream};
 
 #[test]
 fn wanda_streams_without_allocating() {

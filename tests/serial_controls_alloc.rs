@@ -1,78 +1,29 @@
-//! The serial mouse's buttons, the VP joystick, the Nikon focus, the Zaber positioners and the
-//! BiosciencesTools controller report without allocating: a counting global allocator around every driver call
-//! while the simulators stream through them (reads split at random points, garbage on the
-//! line), and, for the devices with an Analog_Output, while clients keep asking for moves
-//! and set points.
+//! The serial mouse's buttons, the VP joystick, the Nikon focus, the Zaber positioners, the
+//! IDEA stepper drive and the BiosciencesTools controller report without allocating: a
+//! counting global allocator around every driver call while the simulators stream through
+//! them (reads split at random points, garbage on the line), and, for the devices with an
+//! Analog_Output, while clients keep asking for moves and set points.
 
-use std::cell::Cell;
-use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::devices::analog_output::AnalogOutputRemote;
-use vrpn::driver::{Lifecycle, Protocol};
 use vrpn::drivers::biosciences::sim::{BioSim, SimConfig as BioConfig};
+use vrpn::drivers::idea::sim::{IdeaSim, SimConfig as IdeaConfig};
 use vrpn::drivers::nikon::sim::{NikonSim, SimConfig as NikonConfig};
 use vrpn::drivers::serialmouse::packet::MouseType;
 use vrpn::drivers::serialmouse::sim::{SerialMouseSim, SimConfig as MouseConfig};
 use vrpn::drivers::vpjoystick::sim::{SimConfig as VpConfig, VpJoystickSim};
 use vrpn::drivers::zaber::sim::{SimConfig as ZaberConfig, ZaberSim};
 use vrpn::server::config::parse_one;
-use vrpn::sim::{DeviceModel, VirtualLine};
-use vrpn::{AnalogRemote, ButtonRemote, Connection};
+use vrpn::sim::VirtualLine;
+use vrpn::Connection;
 
 #[path = "common/counted_driver.rs"]
 mod counted_driver;
-use counted_driver::{start, Counted, COUNT};
-
-type Line<P, M> = VirtualLine<Counted<Lifecycle<P>>, M>;
-
-/// Counts every Analog and Button report `name` sends on `conn`.
-fn count_reports(name: &str, conn: &Connection) -> (Rc<Cell<u64>>, AnalogRemote, ButtonRemote) {
-    let n = Rc::new(Cell::new(0u64));
-    let analog = AnalogRemote::on_connection(name, conn).unwrap();
-    let buttons = ButtonRemote::on_connection(name, conn).unwrap();
-    let (a, b) = (n.clone(), n.clone());
-    analog.on_report(move |_| a.set(a.get() + 1));
-    buttons.on_change(move |_| b.set(b.get() + 1));
-    (n, analog, buttons)
-}
-
-/// Streams `seconds` in steps of `step`, with `noise` on the line once a second and `each`
-/// called before every step (a client asking for something), after a warm-up doing the
-/// same; returns (reports, allocations) of the counted part and the bytes skipped in all.
-fn stream<P: Protocol, M: DeviceModel>(
-    line: &mut Line<P, M>,
-    reports: &Cell<u64>,
-    noise: &[u8],
-    seconds: u32,
-    step: Duration,
-    mut each: impl FnMut(&mut Line<P, M>),
-) -> (u64, u64, u64) {
-    line.split_reads = true;
-    let steps = (Duration::from_secs(1).as_micros() / step.as_micros()) as u32;
-    let mut second = |line: &mut Line<P, M>| {
-        for _ in 0..steps {
-            each(line);
-            line.run_for(step);
-        }
-        line.inject(noise);
-    };
-    line.run_for(Duration::from_millis(1200));
-    assert!(line.driver.0.is_streaming());
-    second(line);
-    second(line);
-    COUNT.with(|c| c.set(0));
-    let before = reports.get();
-    for _ in 0..seconds {
-        second(line);
-    }
-    let skipped = line.driver.0.stats().skipped_bytes;
-    (reports.get() - before, COUNT.with(Cell::get), skipped)
-}
-
-fn quiet_texts() {
-    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
-}
+#[path = "common/streaming_alloc.rs"]
+mod streaming_alloc;
+use counted_driver::{start, Counted};
+use streaming_alloc::{count_reports, quiet_texts, stream_steps};
 
 #[test]
 fn serial_mouse_streams_without_allocating() {
@@ -93,7 +44,7 @@ fn serial_mouse_streams_without_allocating() {
         let sim = SerialMouseSim::new(MouseConfig::new(kind));
         let mut line = VirtualLine::new(Counted(driver), sim, start(), 7);
         let step = Duration::from_millis(100);
-        let (n, allocations, skipped) = stream(&mut line, &reports, noise, 5, step, |_| {});
+        let (n, allocations, skipped) = stream_steps(&mut line, &reports, noise, 5, step, |_| {});
         // A packet every 40 or 60 ms, most changing a button. In `3button` every byte is a
         // first byte or motion: nothing is skipped there.
         assert!(n >= 50, "{word}: {n} reports");
@@ -120,7 +71,7 @@ fn vp_joystick_streams_without_allocating() {
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 8);
     let step = Duration::from_millis(100);
     let noise = [0x41, 0x7F, 0x20];
-    let (n, allocations, skipped) = stream(&mut line, &reports, &noise, 5, step, |_| {});
+    let (n, allocations, skipped) = stream_steps(&mut line, &reports, &noise, 5, step, |_| {});
     // 50 messages a second, each changing at least one of the eight buttons.
     assert!(
         n >= 250 && skipped > 0,
@@ -143,7 +94,7 @@ fn nikon_moves_and_polls_without_allocating() {
     // idle poll).
     let mut k = 0;
     let step = Duration::from_millis(50);
-    let (n, allocations, skipped) = stream(&mut line, &reports, b"zz\r\n", 5, step, |line| {
+    let (n, allocations, skipped) = stream_steps(&mut line, &reports, b"zz\r\n", 5, step, |line| {
         k += 1;
         if k % 10 == 0 {
             line.device.turn_knob(-k);
@@ -172,9 +123,41 @@ fn zaber_moves_without_allocating() {
     // A move of one of the two devices asked for every 50 ms (the idle poll runs between).
     let mut k = 0i32;
     let step = Duration::from_millis(50);
-    let (n, allocations, skipped) = stream(&mut line, &reports, &[9, 9, 9], 5, step, |_| {
+    let (n, allocations, skipped) = stream_steps(&mut line, &reports, &[9, 9, 9], 5, step, |_| {
         k += 1;
         out.request_change_channel_value(k % 2, f64::from(k * 311 - 2000))
+            .unwrap();
+    });
+    assert!(
+        n >= 80 && skipped > 0,
+        "{n} reports, {skipped} bytes skipped"
+    );
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+#[test]
+fn idea_moves_and_polls_without_allocating() {
+    quiet_texts();
+    let cfg: vrpn::drivers::idea::Idea = parse_one(
+        "vrpn_IDEA I0 /dev/ttyS0 3200 1200 2000 40000 100000 290 0 290 290 50 8 1 -1 0 0 0 0 \
+         50 0.5 -60.0\n",
+    );
+    let conn = Connection::new_loopback();
+    let (reports, _a, _b) = count_reports("I0", &conn);
+    let out = AnalogOutputRemote::on_connection("I0", &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let sim = IdeaSim::new(IdeaConfig::new());
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 12);
+    // A move asked for every 50 ms (the position and the inputs polled in turn all along),
+    // and the inputs pressed and released now and then.
+    let mut k = 0i32;
+    let step = Duration::from_millis(50);
+    let (n, allocations, skipped) = stream_steps(&mut line, &reports, b"zz\r\n", 5, step, |line| {
+        k += 1;
+        if k % 7 == 0 {
+            line.device.set_inputs((k % 16) as u8 & 0b1110);
+        }
+        out.request_change_channel_value(0, f64::from(-100 - k * 37 % 300))
             .unwrap();
     });
     assert!(
@@ -198,7 +181,7 @@ fn biosciences_polls_and_sets_without_allocating() {
     // A set point (or control on/off, which is a button change) asked for every 100 ms.
     let mut k = 0u32;
     let step = Duration::from_millis(100);
-    let (n, allocations, skipped) = stream(&mut line, &reports, b"x?\r", 5, step, |_| {
+    let (n, allocations, skipped) = stream_steps(&mut line, &reports, b"x?\r", 5, step, |_| {
         k += 1;
         let channel = (k % 3) as i32;
         let value = if channel == 2 {

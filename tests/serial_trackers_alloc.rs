@@ -1,5 +1,5 @@
 //! The serial trackers of the 3SPACE family, the Liberty, the Polaris, the Crossbow and the
-//! GPS, the inertia mouse and the Global Haptics Orb report without allocating: a counting global allocator around
+//! GPS, the Logitech 3D mouse, the inertia mouse and the Global Haptics Orb report without allocating: a counting global allocator around
 //! every driver call while the simulators stream through them, with reads split at random
 //! points and damage on the line.
 
@@ -19,6 +19,8 @@ use vrpn::drivers::orb::sim::{OrbSim, SimConfig as OrbSimConfig};
 use vrpn::drivers::orb::Orb;
 use vrpn::drivers::polaris::sim::{PolarisSim, SimConfig as PolarisSimConfig};
 use vrpn::drivers::polaris::Polaris;
+use vrpn::drivers::threedmouse::sim::{SimConfig as ThreeDMouseSimConfig, ThreeDMouseSim};
+use vrpn::drivers::threedmouse::ThreeDMouse;
 use vrpn::drivers::threespace::record::Model;
 use vrpn::drivers::threespace::sim::{SimConfig as ThreeSpaceSimConfig, ThreeSpaceSim};
 use vrpn::drivers::threespace::ThreeSpace;
@@ -161,6 +163,28 @@ fn crossbow_streams_without_allocating() {
     let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
     let (allocations, reports) = stream(&mut line, &reports, &[0xAA, 0x55, 0x01]);
     assert!(reports >= 3 * 500, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 10);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn threedmouse_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: ThreeDMouse = parse_one("vrpn_Tracker_3DMouse M /dev/ttyS0 19200 3\n");
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let tracker = TrackerRemote::on_connection("M", &conn).unwrap();
+    let reports = counter();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let buttons = ButtonRemote::on_connection("M", &conn).unwrap();
+    let r = reports.clone();
+    buttons.on_change(move |_| r.set(r.get() + 1));
+    let sim = ThreeDMouseSim::new(ThreeDMouseSimConfig::new(cfg.baud));
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 8);
+    let (allocations, reports) = stream(&mut line, &reports, &[0x01, 0xC5, 0x12]);
+    // About 85 records a second (16 bytes at 19200 baud, a 3 ms answer delay).
+    assert!(reports >= 350, "{reports} reports");
     assert!(line.driver.0.stats().skipped_bytes >= 10);
     assert_eq!(allocations, 0, "allocations while streaming");
 }

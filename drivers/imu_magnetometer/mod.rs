@@ -22,7 +22,7 @@ mod tests;
 
 use std::cell::RefCell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use crate::config::{ConfigError, ConfigLine};
 use crate::devices::analog::AnalogServer;
@@ -31,7 +31,7 @@ use crate::driver::registry::{BuildContext, DeviceSpec, Driver, Interface, Serve
 use crate::error::Error;
 use crate::layered::imu::{axis_line, AxisParams, ImuVector};
 use crate::layered::{update_interval, AnalogSource};
-use crate::time::{Now, TimeVal};
+use crate::time::{checked_duration, Now, TimeVal, MAX_PERIOD};
 use crate::Connection;
 
 /// The registry entry.
@@ -157,7 +157,7 @@ impl MagnetometerDevice {
                 st.input(axes.vector(r.channels()), r.time);
             }
         });
-        let period = Duration::from_secs_f64(update_interval(cfg.update_rate));
+        let period = checked_duration(update_interval(cfg.update_rate)).unwrap_or(MAX_PERIOD);
         Ok(MagnetometerDevice {
             name: cfg.name.clone(),
             analog: AnalogServer::new(&cfg.name, conn, 3)?,

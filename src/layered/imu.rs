@@ -81,6 +81,26 @@ pub fn axis_line(line: &mut ConfigLine<'_, '_>, what: &str) -> Result<AxisParams
     Ok(p)
 }
 
+/// Reads the line after the device line as the name of the device `what` (its first word,
+/// `*NAME` or `NAME@host`; `NULL` for none).
+pub fn device_line(
+    line: &mut ConfigLine<'_, '_>,
+    what: &str,
+) -> Result<Option<DeviceRef>, ConfigError> {
+    let ctx = line.ctx();
+    let block = Ctx::new(ctx.file, ctx.line, format!("{} {what}", line.keyword()));
+    let next = line.block_line_in(&block, &format!("the {what} line"))?;
+    let ctx = block.at(next.number);
+    let t = c_tokens(next.text);
+    let Some(first) = t.first() else {
+        return Err(ctx.err(
+            ConfigErrorKind::MissingArguments,
+            format!("the {what} line needs a device name (*NAME or NAME@host) or NULL"),
+        ));
+    };
+    device_ref(&ctx, &format!("{what} device"), first, true)
+}
+
 /// The latest vector of an axis line and the time of the report it came from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImuVector {

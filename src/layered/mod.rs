@@ -247,6 +247,21 @@ impl AnalogSource {
         })
     }
 
+    /// A second source reading `src` on the connection of this one, which was opened for the
+    /// same device reference (C++ shares one connection per remote name, so every reader of a
+    /// device sees its report in the same pass). Polling this one does nothing: this one's
+    /// poll services the connection for both.
+    pub(crate) fn alongside(&self, src: &DeviceRef) -> Result<AnalogSource, Error> {
+        let device = match src {
+            DeviceRef::Local(n) => n.clone(),
+            DeviceRef::Remote(n) => crate::name::DeviceName::parse_remote(n)?.device,
+        };
+        Ok(AnalogSource {
+            remote: AnalogRemote::on_connection(&device, self.remote.connection())?,
+            local: true,
+        })
+    }
+
     /// Services the source's connection unless that is the server's own (which the server
     /// loop services, liveness pings included; local messages arrive as they are packed).
     pub(crate) fn poll(&self) {

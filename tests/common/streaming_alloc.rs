@@ -1,0 +1,92 @@
+//! What the serial drivers' zero-allocation tests share: counting a device's reports on an
+//! in-process connection, and streaming a driver on a virtual line (reads split at random
+//! points, noise on the line once a second) while a counting allocator watches its calls.
+//! A test crate that includes this file also includes `counted_driver.rs` as
+//! `mod counted_driver`.
+#![allow(dead_code)]
+
+use std::cell::Cell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use vrpn::driver::{Lifecycle, Protocol};
+use vrpn::sim::{DeviceModel, VirtualLine};
+use vrpn::{AnalogRemote, ButtonRemote, Connection};
+
+use super::counted_driver::{Counted, COUNT};
+
+/// A driver's lifecycle on a virtual line, its calls counted.
+pub type Line<P, M> = VirtualLine<Counted<Lifecycle<P>>, M>;
+
+/// Counts every Analog and Button report `name` sends on `conn` (keep the remotes alive).
+pub fn count_reports(name: &str, conn: &Connection) -> (Rc<Cell<u64>>, AnalogRemote, ButtonRemote) {
+    let n = Rc::new(Cell::new(0u64));
+    let analog = AnalogRemote::on_connection(name, conn).unwrap();
+    let buttons = ButtonRemote::on_connection(name, conn).unwrap();
+    let (a, b) = (n.clone(), n.clone());
+    analog.on_report(move |_| a.set(a.get() + 1));
+    buttons.on_change(move |_| b.set(b.get() + 1));
+    (n, analog, buttons)
+}
+
+/// Keeps the drivers' texts off the test output.
+pub fn quiet_texts() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+}
+
+/// Streams `seconds` with `noise` on the line once a second, after a warm-up with the same
+/// noise, and returns (reports, allocations) of the counted part. The noise must be skipped.
+pub fn stream<P: Protocol, M: DeviceModel>(
+    line: &mut Line<P, M>,
+    reports: &Cell<u64>,
+    noise: &[u8],
+    seconds: u32,
+) -> (u64, u64) {
+    line.split_reads = true;
+    line.run_for(Duration::from_millis(700));
+    assert!(line.driver.0.is_streaming());
+    line.inject(noise);
+    line.run_for(Duration::from_millis(1500));
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..seconds {
+        line.run_for(Duration::from_secs(1));
+        line.inject(noise);
+    }
+    assert!(line.driver.0.stats().skipped_bytes > 0);
+    (reports.get() - before, COUNT.with(Cell::get))
+}
+
+/// Streams `seconds` in steps of `step`, with `noise` on the line once a second and `each`
+/// called before every step (a client asking for something), after two seconds of warm-up
+/// doing the same; returns (reports, allocations) of the counted part and the bytes skipped
+/// in all.
+pub fn stream_steps<P: Protocol, M: DeviceModel>(
+    line: &mut Line<P, M>,
+    reports: &Cell<u64>,
+    noise: &[u8],
+    seconds: u32,
+    step: Duration,
+    mut each: impl FnMut(&mut Line<P, M>),
+) -> (u64, u64, u64) {
+    line.split_reads = true;
+    let steps = (Duration::from_secs(1).as_micros() / step.as_micros()) as u32;
+    let mut second = |line: &mut Line<P, M>| {
+        for _ in 0..steps {
+            each(line);
+            line.run_for(step);
+        }
+        line.inject(noise);
+    };
+    line.run_for(Duration::from_millis(1200));
+    assert!(line.driver.0.is_streaming());
+    second(line);
+    second(line);
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..seconds {
+        second(line);
+    }
+    let skipped = line.driver.0.stats().skipped_bytes;
+    (reports.get() - before, COUNT.with(Cell::get), skipped)
+}
