@@ -50,7 +50,8 @@ fn stalled_client_sheds_unreliable_then_is_dropped() {
         good.mainloop().unwrap();
     };
     let start = Instant::now();
-    while poses.get() < 100 {
+    // Past Limits::udp_after_descriptions, so the good client's reports go by UDP.
+    while poses.get() < 100 || start.elapsed() < Limits::default().udp_after_descriptions {
         assert!(
             start.elapsed() < Duration::from_secs(10),
             "good client got no poses"
@@ -69,6 +70,14 @@ fn stalled_client_sheds_unreliable_then_is_dropped() {
     let flood = server.register_sender("Flood").unwrap();
     let ft = server.register_type("flood").unwrap();
     let payload = [0u8; 1000];
+    // New names keep the good client's unreliable messages on TCP for
+    // Limits::udp_after_descriptions; the flood starts after that.
+    let described = Instant::now();
+    while described.elapsed() < Limits::default().udp_after_descriptions + Duration::from_millis(20)
+    {
+        step();
+        std::thread::sleep(Duration::from_micros(200));
+    }
 
     // 1. Unreliable flood, far more than the limit: shed, never dropped for it. The kernel
     // absorbs megabytes first (loopback receive buffers autotune up to net.ipv4.tcp_rmem's
