@@ -11,6 +11,7 @@
 use crate::driver::Driver;
 
 pub mod adbox;
+pub mod atmel;
 pub mod biosciences;
 pub mod button_5dt_server;
 pub mod cerealbox;
@@ -45,6 +46,7 @@ pub mod imu_simple_combiner;
 pub mod inertiamouse;
 pub mod joyfly;
 pub mod joylin;
+pub mod jsonnet;
 pub mod liberty;
 pub mod magellan;
 pub mod nikon;
@@ -60,6 +62,7 @@ pub mod sgibox;
 pub mod spaceball;
 pub mod spacemouse;
 pub mod streaming_arduino;
+pub mod tek4662;
 pub mod threedmouse;
 pub mod threespace;
 pub mod tng3;
@@ -113,10 +116,12 @@ pub static REGISTRY: &[&Driver] = &[
     &imager_stream_buffer::DRIVER,
     // Hardware, one folder each.
     &adbox::DRIVER,
+    &atmel::DRIVER,
     &cerealbox::DRIVER,
     &crossbow::DRIVER,
     &dyna::DRIVER,
     &dtrack::DRIVER,
+    &jsonnet::DRIVER,
     &fastrak::DRIVER,
     &flock::DRIVER,
     &gps::DRIVER,
@@ -133,6 +138,7 @@ pub static REGISTRY: &[&Driver] = &[
     &orb::DRIVER,
     &spaceball::DRIVER,
     &streaming_arduino::DRIVER,
+    &tek4662::DRIVER,
     &zaber::DRIVER,
     &pinchglove::DRIVER,
     &polaris::DRIVER,
@@ -164,6 +170,7 @@ pub static REGISTRY: &[&Driver] = &[
 #[cfg(feature = "sim")]
 pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &adbox::sim::SIMULATOR,
+    &atmel::sim::SIMULATOR,
     &biosciences::sim::SIMULATOR,
     &cerealbox::sim::SIMULATOR,
     &crossbow::sim::SIMULATOR,
@@ -188,6 +195,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &sgibox::sim::SIMULATOR,
     &spaceball::sim::SIMULATOR,
     &streaming_arduino::sim::SIMULATOR,
+    &tek4662::sim::SIMULATOR,
     &threedmouse::sim::SIMULATOR,
     &threespace::sim::SIMULATOR,
     &tng3::sim::SIMULATOR,
@@ -195,6 +203,7 @@ pub static SIMULATORS: &[&crate::sim::Simulator] = &[
     &wanda::sim::SIMULATOR,
     &zaber::sim::SIMULATOR,
     &yei::sim::SIMULATOR,
+    &yei::sim::SIMULATOR_WIRELESS,
 ];
 
 #[cfg(all(test, feature = "sim"))]

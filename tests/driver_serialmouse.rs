@@ -12,6 +12,10 @@ use vrpn::sim::rig::{assert_first_byte_stamps, Client, Heard, ServerProcess};
 use vrpn::sim::SimulatedDevice;
 use vrpn::{Now, TimeVal};
 
+#[path = "common/faults.rs"]
+mod faults;
+use faults::{garbage_costs_nothing, silence_is_normal, unplugged_and_reopened};
+
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
 fn heard(client: &Client, from: usize) -> Vec<((usize, bool), TimeVal)> {
@@ -89,41 +93,9 @@ fn mouse_systems_mouse_through_vrpn_server_to_a_client() {
     check(&sim, &client, kind, t0);
     // Garbage between packets: skipped, said, nothing lost.
     let junk: [&[u8]; 3] = [&[0x41], &[0x7F, 0x55], &[0x20]];
-    sim.inject_between_records(&junk);
-    client.wait_until(Duration::from_secs(5), "the garbage sent", &server, |_| {
-        sim.injected() == junk.len()
-    });
-    let have = count(&client, 0);
-    client.wait_until(
-        Duration::from_secs(5),
-        "changes after garbage",
-        &server,
-        |c| count(c, 0) >= have + 20,
-    );
+    garbage_costs_nothing(&sim, &client, &server, &junk, count, 20);
     check(&sim, &client, kind, t0);
-    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
     // Silence is normal for a mouse: no text, then changes again.
-    let from = client.len();
-    sim.set_mute(true);
-    client.pump_until(Duration::from_secs(3), |_| false);
-    assert_eq!(client.texts_from(from), Vec::<String>::new());
-    sim.set_mute(false);
-    client.wait_until(
-        Duration::from_secs(5),
-        "changes after silence",
-        &server,
-        |c| count(c, from) >= 20,
-    );
-    // Unplugged: reported, reopened, resumed.
-    let from = client.len();
-    sim.unplug();
-    client.wait_text(from, "failed", Duration::from_secs(3), &server);
-    sim.plug().unwrap();
-    client.wait_until(
-        Duration::from_secs(8),
-        "changes after plugging back",
-        &server,
-        |c| count(c, from) >= 20,
-    );
-    client.wait_text(from, "is open again", Duration::from_secs(1), &server);
+    silence_is_normal(&sim, &client, &server, count, 20);
+    unplugged_and_reopened(&sim, &client, &server, count, 20);
 }

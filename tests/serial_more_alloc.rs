@@ -1,19 +1,24 @@
-//! The Radamec SPI, TNG-3, raw SGI box and UNC Python drivers report without allocating: a counting
-//! global allocator around every driver call while the simulators stream through them (reads
-//! split at random points, garbage on the line), and around the Python box's samples while
-//! its buttons change and bounce.
+//! The Radamec SPI, TNG-3, raw SGI box, Tek4662 plotter and UNC Python drivers report without
+//! allocating: a counting global allocator around every driver call while the simulators
+//! stream through them (reads split at random points, garbage on the line; the plotter also
+//! moved by pose requests), and around the Python box's samples while its buttons change and
+//! bounce.
 
 use std::cell::Cell;
+use std::rc::Rc;
+use std::time::Duration;
 
+use vrpn::devices::poser::PoserRemote;
 use vrpn::devices::ServerDevice;
 use vrpn::drivers::parport_python::source::StatusSource;
 use vrpn::drivers::parport_python::{PythonButtons, READS_PER_SAMPLE, SAMPLE_PERIOD};
 use vrpn::drivers::radamec::sim::{RadamecSim, SimConfig as RadamecConfig};
 use vrpn::drivers::sgibox::sim::{SgiSim, SimConfig as SgiConfig};
+use vrpn::drivers::tek4662::sim::{PlotterSim, SimConfig as PlotterConfig};
 use vrpn::drivers::tng3::sim::{SimConfig as Tng3Config, Tng3Sim};
 use vrpn::server::config::parse_one;
 use vrpn::sim::VirtualLine;
-use vrpn::Connection;
+use vrpn::{Connection, TrackerRemote};
 
 #[path = "common/counted_driver.rs"]
 mod counted_driver;
@@ -63,6 +68,55 @@ fn tng3_streams_without_allocating() {
     let (n, allocations) = stream(&mut line, &reports, &[0x33, 0x55, 0x12], 5);
     assert!(n >= 200, "{n} reports");
     assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+#[test]
+fn tek4662_follows_and_moves_the_pen_without_allocating() {
+    quiet_texts();
+    let cfg: vrpn::drivers::tek4662::Tek4662 = parse_one("vrpn_Tek4662 P0 /dev/ttyS0 1200\n");
+    let conn = Connection::new_loopback();
+    let reports = Rc::new(Cell::new(0u64));
+    let tracker = TrackerRemote::on_connection("P0", &conn).unwrap();
+    let r = reports.clone();
+    tracker.on_pose(move |_| r.set(r.get() + 1));
+    let poser = PoserRemote::on_connection("P0", &conn).unwrap();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let mut sim = PlotterConfig::new(1200);
+    sim.wander = true;
+    let mut line = VirtualLine::new(Counted(driver), PlotterSim::new(sim), start(), 7);
+    line.split_reads = true;
+    // Each second: a pose request and garbage just after an answer, between two.
+    let run = |line: &mut VirtualLine<_, PlotterSim>, seconds: u32| {
+        for k in 0..seconds {
+            let x = f64::from(k % 7) * 0.05;
+            poser
+                .request_pose(
+                    line.now().wall,
+                    [x, 0.2 - x / 2.0, 0.0],
+                    [0.0, 0.0, 0.0, 1.0],
+                )
+                .unwrap();
+            line.run_for(Duration::from_millis(400));
+            let heard = reports.get();
+            assert!(line.run_until(Duration::from_millis(600), |_| reports.get() > heard));
+            line.inject(&[0x00, 0x7a, 0x31]);
+            line.run_for(Duration::from_millis(300));
+        }
+    };
+    run(&mut line, 3);
+    assert!(line.driver.0.is_streaming());
+    COUNT.with(|c| c.set(0));
+    let (before, moves) = (reports.get(), line.device.moves());
+    run(&mut line, 8);
+    let n = reports.get() - before;
+    assert!(n >= 24, "{n} reports");
+    assert!(line.device.moves() - moves >= 6);
+    assert!(line.driver.0.stats().skipped_bytes > 0);
+    assert_eq!(
+        COUNT.with(Cell::get),
+        0,
+        "allocations while sending {n} reports"
+    );
 }
 
 /// A parallel port whose buttons change every few samples and bounce now and then, counting

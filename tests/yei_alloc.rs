@@ -7,7 +7,7 @@ use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::drivers::yei::sim::{SimConfig, YeiSim};
-use vrpn::drivers::yei::Yei;
+use vrpn::drivers::yei::{Yei, YeiWireless};
 use vrpn::serial::SerialDriver;
 use vrpn::server::config::parse_one;
 use vrpn::sim::{DeviceModel, VirtualLine};
@@ -67,5 +67,30 @@ fn wired_unit_streams_without_allocating() {
     // 100 records/s, each at least two poses, an acceleration and an analog report.
     assert!(reports >= 4 * 450, "{reports} reports");
     assert!(line.driver.0.stats().skipped_bytes >= 50);
+    assert_eq!(allocations, 0, "allocations while streaming");
+}
+
+#[test]
+fn wireless_dongle_with_two_units_streams_without_allocating() {
+    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
+    let cfg: YeiWireless = parse_one(
+        "vrpn_YEI_3Space_Sensor_Wireless W0 0 /dev/ttyACM0 115200 0 0 100 0 0 1 1 /\n\
+         vrpn_YEI_3Space_Sensor_Wireless W1 3 0 0 100 0 1 0 1\n",
+    );
+    let conn = Connection::new_loopback();
+    let driver = cfg.lifecycle(&conn).unwrap();
+    let reports = Rc::new(Cell::new(0));
+    let _remotes = (
+        remotes("W0", &conn, &reports),
+        remotes("W1", &conn, &reports),
+    );
+    let sim = YeiSim::new(SimConfig::wireless(cfg.baud, &[0, 3]));
+    let mut line = VirtualLine::new(Counted(driver), sim, start(), 9);
+    let (allocations, reports) = stream(&mut line, &reports, b"\x41\x7F\x00\x03\x12garbage");
+    // Two units at 100 records/s, each at least two poses, an acceleration and an analog
+    // report.
+    assert!(reports >= 2 * 4 * 450, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= 50);
+    assert_eq!(line.driver.0.stats().resets, 1);
     assert_eq!(allocations, 0, "allocations while streaming");
 }

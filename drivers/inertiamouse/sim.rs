@@ -27,6 +27,12 @@ pub static SIMULATOR: Simulator = Simulator {
     make: |baud| Box::new(InertiaSim::new(SimConfig::new(baud))),
 };
 
+/// With [`SimConfig::wait_for_host`], the first record leaves this long after the host set
+/// the line's speed: a driver that flushes its input while opening the port (after setting
+/// the speed) would otherwise lose it on a loaded machine, and with it every later value
+/// (the filters carry the whole history).
+const HOST_SETTLE: Duration = Duration::from_millis(100);
+
 /// How the simulated mouse behaves.
 #[derive(Clone, Debug)]
 pub struct SimConfig {
@@ -96,7 +102,8 @@ pub struct InertiaSim {
     state: MouseState,
     reported: [f64; CHANNELS],
     sent: Vec<Sent>,
-    host_seen: bool,
+    /// When the host set the line's speed (opened the port).
+    host_seen: Option<Instant>,
 }
 
 impl InertiaSim {
@@ -112,7 +119,7 @@ impl InertiaSim {
             state: MouseState::default(),
             reported: [0.0; CHANNELS],
             sent: Vec::new(),
-            host_seen: false,
+            host_seen: None,
         }
     }
 
@@ -157,12 +164,16 @@ impl InertiaSim {
 impl DeviceModel for InertiaSim {
     fn receive(&mut self, _bytes: &[u8], _now: Now) {}
 
-    fn set_baud(&mut self, _baud: u32, _now: Now) {
-        self.host_seen = true;
+    fn set_baud(&mut self, _baud: u32, now: Now) {
+        self.host_seen.get_or_insert(now.mono);
     }
 
     fn transmit(&mut self, now: Now, out: &mut Vec<u8>) {
-        if self.cfg.wait_for_host && !self.host_seen {
+        if self.cfg.wait_for_host
+            && !self
+                .host_seen
+                .is_some_and(|seen| now.mono >= seen + HOST_SETTLE)
+        {
             return;
         }
         let period = self.cfg.period.max(self.byte_time() * 40);

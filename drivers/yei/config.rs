@@ -2,6 +2,7 @@
 //! their continuation lines, what they serve and how they are built.
 
 use super::wired::WiredProtocol;
+use super::wireless::WirelessProtocol;
 use crate::config::continuation::{head, split_continuation};
 use crate::config::fields::{baud, device_name, f32_field, f64_field, need, uint_in};
 use crate::config::lines::c_tokens;
@@ -49,6 +50,23 @@ pub struct Yei {
     /// Baud rate.
     pub baud: u32,
 }
+
+/// `vrpn_YEI_3Space_Sensor_Wireless NAME ID PORT BAUD CALIBRATE TARE FPS RED GREEN BLUE
+/// LED_MODE [\ | /]` and, after a `/`, a further unit on the same dongle per line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct YeiWireless {
+    /// The dongle's serial port.
+    pub port: String,
+    /// Baud rate.
+    pub baud: u32,
+    /// The units, in the order of their lines.
+    pub units: Vec<Unit>,
+}
+
+const FIRST_USAGE: &str = "name, logical_id, port, baud, calibrate_gyros, tare, \
+                           frames_per_second, red, green, blue, LED_mode";
+const MORE_USAGE: &str = "name, logical_id, calibrate_gyros, tare, frames_per_second, red, \
+                          green, blue, LED_mode";
 
 const WIRED_USAGE: &str = "name, port, baud, calibrate_gyros, tare, frames_per_second, red, \
                            green, blue, LED_mode";
@@ -148,9 +166,7 @@ fn reset_commands(
 }
 
 /// Parses a `vrpn_YEI_3Space_Sensor` entry.
-pub(super) fn parse_wired(
-    line: &mut ConfigLine<'_, '_>,
-) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+fn parse_wired(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
     let ctx = line.ctx().clone();
     let (a, cont) = head(line);
     need(&ctx, &a, 10, WIRED_USAGE)?;
@@ -168,6 +184,83 @@ pub(super) fn parse_wired(
         ));
     }
     Ok(Box::new(Yei { unit, port, baud }))
+}
+
+/// Parses a `vrpn_YEI_3Space_Sensor_Wireless` entry and the further units after a `/`.
+fn parse_wireless(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    let ctx = line.ctx().clone();
+    let (a, cont) = head(line);
+    need(&ctx, &a, 11, FIRST_USAGE)?;
+    no_extra(&ctx, &a, 11, true)?;
+    let name = device_name(&ctx, "name", a[0])?;
+    let id = uint_in(
+        &ctx,
+        "logical_id_on_wireless (0-14)",
+        a[1],
+        0,
+        MAX_LOGICAL_ID,
+    )? as u8;
+    let port = a[2].to_owned();
+    let baud = baud(&ctx, a[3])?;
+    let mut first = unit_fields(&ctx, name, id, &a[4..])?;
+    let (commands, mut cont) = reset_commands(line, cont)?;
+    first.reset_commands = commands;
+    let mut units = vec![first];
+    while cont == Some('/') {
+        let next = line.block_line("the further wireless unit promised by the trailing '/'")?;
+        let here = ctx.at(next.number);
+        let (body, c) = split_continuation(next.content());
+        let t = c_tokens(body);
+        if t.first() != Some(&WIRELESS_KEYWORD) {
+            return Err(here.err(
+                ConfigErrorKind::BadBlockLine,
+                format!(
+                    "after a trailing '/', a line '{WIRELESS_KEYWORD} {MORE_USAGE}' (no port: \
+                     the dongle's) was promised; found '{}'",
+                    t.first().unwrap_or(&"")
+                ),
+            ));
+        }
+        let t = &t[1..];
+        need(&here, t, 9, MORE_USAGE)?;
+        no_extra(&here, t, 9, true)?;
+        let name = device_name(&here, "name", t[0])?;
+        let id = uint_in(
+            &here,
+            "logical_id_on_wireless (0-14)",
+            t[1],
+            0,
+            MAX_LOGICAL_ID,
+        )? as u8;
+        let mut unit = unit_fields(&here, name, id, &t[2..])?;
+        if let Some(o) = units
+            .iter()
+            .find(|o| o.logical_id == id || o.name == unit.name)
+        {
+            return Err(here.err(
+                ConfigErrorKind::BadBlockLine,
+                format!(
+                    "unit '{}' (logical id {id}) clashes with unit '{}' (logical id {}) on \
+                     the same dongle: names and logical ids must differ",
+                    unit.name, o.name, o.logical_id
+                ),
+            ));
+        }
+        let (commands, after) = reset_commands(line, c)?;
+        unit.reset_commands = commands;
+        units.push(unit);
+        cont = after;
+    }
+    Ok(Box::new(YeiWireless { port, baud, units }))
+}
+
+/// Parses either keyword's entry.
+pub(super) fn parse(line: &mut ConfigLine<'_, '_>) -> Result<Box<dyn DeviceSpec>, ConfigError> {
+    if line.keyword() == WIRELESS_KEYWORD {
+        parse_wireless(line)
+    } else {
+        parse_wired(line)
+    }
 }
 
 const SERVED: [Interface; 3] = [Interface::Tracker, Interface::Analog, Interface::Button];
@@ -195,5 +288,34 @@ impl DeviceSpec for Yei {
     fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
         let protocol = WiredProtocol::new(self, cx.conn())?;
         Ok(vec![serve(&self.unit.name, &self.port, protocol, cx)])
+    }
+}
+
+impl YeiWireless {
+    /// The driver for this entry (every unit on the dongle), with its servers on `conn`.
+    pub fn lifecycle(&self, conn: &Connection) -> Result<Lifecycle<WirelessProtocol>, Error> {
+        Ok(Lifecycle::new(
+            &self.units[0].name,
+            WirelessProtocol::new(self, conn)?,
+            conn,
+        ))
+    }
+}
+
+impl DeviceSpec for YeiWireless {
+    fn name(&self) -> &str {
+        &self.units[0].name
+    }
+
+    fn served(&self) -> Vec<Served<'_>> {
+        self.units
+            .iter()
+            .flat_map(|u| Served::all(&u.name, &SERVED))
+            .collect()
+    }
+
+    fn build(&self, cx: &BuildContext<'_>) -> Result<Vec<Box<dyn ServerDevice>>, Error> {
+        let protocol = WirelessProtocol::new(self, cx.conn())?;
+        Ok(vec![serve(&self.units[0].name, &self.port, protocol, cx)])
     }
 }

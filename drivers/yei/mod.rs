@@ -1,8 +1,8 @@
 //! YEI Technology 3-Space Sensor units on a serial line: wired (`vrpn_YEI_3Space_Sensor`,
 //! the unit's own USB serial port) and wireless (`vrpn_YEI_3Space_Sensor_Wireless`, units
 //! paired with a wireless dongle on one port). Commands in [`command`], the streamed record
-//! in [`record`], the wired stream's framing in [`framing`]; a simulator in `sim` (with the
-//! `sim` feature).
+//! in [`record`], the wired stream's framing in [`framing`], the dongle's in [`dongle`]; a
+//! simulator in `sim` (with the `sim` feature).
 //!
 //! # Configuration lines served
 //!
@@ -16,6 +16,16 @@
 //! followed by a line holding one ASCII command (decimal, without its `:`, e.g.
 //! `238,1,1,0`), sent at every reset; that line may end in `\` again.
 //!
+//! ```text
+//! vrpn_YEI_3Space_Sensor_Wireless NAME ID PORT BAUD CALIBRATE TARE FPS RED GREEN BLUE LED_MODE [\ | /]
+//! vrpn_YEI_3Space_Sensor_Wireless NAME ID CALIBRATE TARE FPS RED GREEN BLUE LED_MODE [\ | /]
+//! ```
+//!
+//! A wireless unit at logical id `ID` (0–14) of the dongle on `PORT`, with the same fields;
+//! its `\` command lines may end in `/`, as its first line may, and then a line of the second
+//! form describes another unit on the same dongle (no port). Each unit is served as a wired
+//! one is, under its own name; one driver runs the dongle ([`wireless`]).
+//!
 //! # What is sent
 //!
 //! `NAME` is a Tracker with two sensors (0: untared orientation, 1: tared orientation;
@@ -26,18 +36,24 @@
 //!
 //! # Supervision
 //!
-//! Two seconds without a record: C++'s timeout text and a reset.
+//! Two seconds without a record (from any unit on a dongle): C++'s timeout text and a reset;
+//! a unit of a dongle without a record for two seconds (silent, or left out at the reset
+//! because it failed) resets the dongle too, which tries it again.
 
 pub mod command;
 pub mod config;
+pub mod dongle;
 pub mod framing;
 pub mod record;
 #[cfg(any(test, feature = "sim"))]
 pub mod sim;
 pub mod wired;
+pub mod wireless;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_wireless;
 
 use std::time::Duration;
 
@@ -47,12 +63,12 @@ use crate::driver::{Cx, Driver, Recovery, Supervision};
 use crate::time::Now;
 use crate::{AnalogServer, ButtonServer, Connection, Error, TrackerServer};
 
-pub use self::config::{Unit, Yei};
+pub use self::config::{Unit, Yei, YeiWireless};
 
-/// The registry entry: `vrpn_YEI_3Space_Sensor`.
+/// The registry entry: `vrpn_YEI_3Space_Sensor` and `vrpn_YEI_3Space_Sensor_Wireless`.
 pub static DRIVER: Driver = Driver {
-    keywords: &["vrpn_YEI_3Space_Sensor"],
-    parse: config::parse_wired,
+    keywords: &["vrpn_YEI_3Space_Sensor", config::WIRELESS_KEYWORD],
+    parse: config::parse,
     hints: &[],
 };
 

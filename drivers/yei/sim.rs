@@ -9,8 +9,8 @@
 //! at its interval; a wireless unit's records wait in the dongle (manual flush mode) until
 //! the host releases them one at a time (`F7 B4 id`), each as `00 id 59` and the record. Every
 //! wireless command is answered by a header (`00 id len` and data, or `01 id` for an id
-//! nothing is paired at); an ASCII one by `0,id,0\r\n`. Bytes go out paced at the baud
-//! rate. With [`SimConfig::keep_log`] it logs what a client must receive ([`YeiSim::sent`]),
+//! nothing is paired at); an ASCII one by `0,id,0\r\n`. A wired unit's bytes go out paced
+//! at the baud rate; the dongle's answers whole (it is a USB device). With [`SimConfig::keep_log`] it logs what a client must receive ([`YeiSim::sent`]),
 //! computed from `record_of` with f32 rounding, with the time each record's first byte left.
 
 use std::collections::VecDeque;
@@ -249,7 +249,12 @@ impl YeiSim {
         self.cfg.wireless.is_some()
     }
 
+    /// The time a byte takes on the line: a wired unit's UART at its baud rate; none for the
+    /// dongle, a USB device whose answers come whole in its packets.
     fn byte_time(&self) -> Duration {
+        if self.wireless() {
+            return Duration::ZERO;
+        }
         let b = u64::from(self.cfg.baud.max(1));
         Duration::from_micros((10_000_000 + b / 2) / b)
     }
@@ -432,7 +437,10 @@ impl YeiSim {
                 let Some(next) = unit.next.filter(|&t| unit.streaming && t <= now) else {
                     break;
                 };
-                let interval = Duration::from_micros(u64::from(unit.interval_us)).max(record_time);
+                // As fast as it can: a record's time on the line, at least 1 ms.
+                let interval = Duration::from_micros(u64::from(unit.interval_us))
+                    .max(record_time)
+                    .max(Duration::from_millis(1));
                 let k = unit.count;
                 self.units[u].count += 1;
                 self.units[u].next = Some(next + interval);
