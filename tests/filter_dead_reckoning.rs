@@ -74,7 +74,7 @@ fn predictions_match_an_independent_computation() {
         let Some(s) = heard
             .source_poses
             .iter()
-            .find(|s| s.sensor == p.sensor && ahead(s.time) == p.time)
+            .find(|s| s.sensor == p.sensor && ahead(s.sender_time) == p.sender_time)
         else {
             continue;
         };
@@ -90,13 +90,14 @@ fn predictions_match_an_independent_computation() {
         compared += 1;
     }
     assert!(compared >= 150, "{compared} of {}", heard.predictions.len());
-    // Velocities pass through unchanged, same time stamp.
+    // Velocities pass through unchanged, same time stamp (the server's: `time` is translated
+    // by the clock-synchronisation estimate, which moves from one message to the next).
     assert!(heard.passed_velocities.len() >= 50);
     for v in &heard.passed_velocities {
         let s = heard
             .source_velocities
             .iter()
-            .find(|s| s.sensor == v.sensor && s.time == v.time)
+            .find(|s| s.sensor == v.sensor && s.sender_time == v.sender_time)
             .expect("a velocity the source sent");
         assert_eq!(
             (v.vel, v.vel_quat, v.vel_quat_dt),
