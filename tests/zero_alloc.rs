@@ -222,8 +222,9 @@ impl Net {
             std::thread::sleep(Duration::from_micros(200));
         }
         // Unreliable messages keep to TCP for a while after the descriptions
-        // (Limits::udp_after_descriptions): the warm-up runs past that, so the measurement
-        // sees the steady state of the path under test.
+        // (Limits::udp_after_descriptions, or until the peer answers a clock query): the
+        // warm-up runs past that, so that the measurement covers the path under test (the UDP
+        // test counts the datagrams that went out).
         let connected = Instant::now();
         let hold = vrpn::Limits::default().udp_after_descriptions + Duration::from_millis(50);
         let mut i = 0;
@@ -414,7 +415,8 @@ fn udp_fan_out_to_many_clients_does_not_allocate() {
     };
     let start = Instant::now();
     let mut i = 0;
-    // Past Limits::udp_after_descriptions, so the reports go by UDP.
+    // Past Limits::udp_after_descriptions, so that the measured reports go by UDP (the test
+    // counts the datagrams).
     let hold = vrpn::Limits::default().udp_after_descriptions + Duration::from_millis(50);
     while clients.iter().any(|(_, p)| p.get() < 200) || start.elapsed() < hold {
         assert!(start.elapsed() < Duration::from_secs(20), "warm-up stalled");

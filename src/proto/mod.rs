@@ -132,7 +132,9 @@ pub struct Limits {
     /// before its TCP stream in each pass and drops, without a word, a message whose type
     /// it has not been told yet, so a report sent by UDP right behind the descriptions sent
     /// by TCP can overtake them and be lost (a C++ client missed the answer to the ping it
-    /// sent on connecting). Zero sends by UDP at once.
+    /// sent on connecting). A peer that answers a clock query sent during the hold (a peer of
+    /// this crate, with `clock_sync` on) has shown it read the descriptions, and the hold ends
+    /// at once. Zero sends by UDP at once.
     pub udp_after_descriptions: Duration,
 }
 

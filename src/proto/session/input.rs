@@ -349,6 +349,9 @@ impl Session {
         let hold = self.limits.udp_after_descriptions;
         if let Some(p) = self.peer_mut(peer) {
             p.udp_ready = ok;
+            if ok {
+                p.udp_tx.allocate();
+            }
             p.hold_udp(now.mono, hold);
         }
         self.timeouts_changed();

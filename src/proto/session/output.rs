@@ -142,6 +142,7 @@ impl Session {
             }
             if p.udp_held_until.is_some_and(|t| now.mono >= t) {
                 p.udp_held_until = None;
+                p.udp_hold_probe = None;
             }
         }
         for slot in 0..self.peers.len() {
@@ -297,6 +298,7 @@ impl Session {
                 continue;
             };
             while let Some(q) = c.poll_query(now) {
+                p.note_clock_query(q.id);
                 let mut buf = [0u8; crate::wire::payload::clock::Query::LEN];
                 let n = q.encode(&mut buf);
                 let _ = p.pack(
