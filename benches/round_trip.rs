@@ -6,6 +6,13 @@
 //! user message is echoed by a server handler, so that the UDP channel is what is measured.
 //! Every VRPN message here is a bare 24-byte header, the size of the raw messages.
 //!
+//! A second pair of baselines runs the same raw sockets the way an event-driven library must:
+//! each side has its own epoll set (mio) and polls it once per pass before it reads, and the
+//! passes alternate as they do for VRPN (client: poll, read, send; server: poll, read, reply),
+//! so a round trip makes the same three `epoll_wait`s, two sends and two receives as the VRPN
+//! scenarios. VRPN over that baseline is what the library itself costs (user code, buffers);
+//! the epoll baseline over the raw one is what any reactor costs.
+//!
 //! Scenarios are measured in interleaved rounds, so that load from other processes affects
 //! baseline and VRPN alike.
 
@@ -81,6 +88,140 @@ fn raw_udp() -> impl FnMut() {
         recv_spin(&b, &mut buf);
         b.send(&buf[..24]).unwrap();
         recv_spin(&a, &mut buf);
+    }
+}
+
+/// One side of an epoll ping-pong: a socket in an epoll set of its own.
+struct EpollSide<S> {
+    poll: mio::Poll,
+    events: mio::Events,
+    sock: S,
+}
+
+impl<S: mio::event::Source> EpollSide<S> {
+    /// `interest` as the library registers the same kind of socket: a TCP stream for reading
+    /// and writing, a UDP socket for reading only (a UDP socket registered for writing would
+    /// get a write-space event after every datagram it sends).
+    fn new(mut sock: S, interest: mio::Interest) -> EpollSide<S> {
+        let poll = mio::Poll::new().unwrap();
+        poll.registry()
+            .register(&mut sock, mio::Token(1), interest)
+            .unwrap();
+        EpollSide {
+            poll,
+            events: mio::Events::with_capacity(256),
+            sock,
+        }
+    }
+
+    /// One poll without waiting: whether the socket became readable.
+    fn readable(&mut self) -> bool {
+        self.poll
+            .poll(&mut self.events, Some(Duration::ZERO))
+            .unwrap();
+        self.events.iter().any(|e| e.is_readable())
+    }
+}
+
+/// Reads one 24-byte message from an edge-triggered stream: a read shorter than the buffer
+/// proves the socket empty (what the library does too).
+fn read_message(s: &mut mio::net::TcpStream, buf: &mut [u8]) -> bool {
+    match s.read(buf) {
+        Ok(0) => panic!("peer closed"),
+        Ok(n) => {
+            assert_eq!(n, 24);
+            true
+        }
+        Err(e) if e.kind() == ErrorKind::WouldBlock => false,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Raw TCP through two epoll loops, in the passes of the VRPN scenarios.
+fn epoll_tcp() -> impl FnMut() {
+    let l = TcpListener::bind((Ipv4Addr::LOCALHOST, 0)).unwrap();
+    let a = TcpStream::connect(l.local_addr().unwrap()).unwrap();
+    let (b, _) = l.accept().unwrap();
+    for s in [&a, &b] {
+        s.set_nodelay(true).unwrap();
+        s.set_nonblocking(true).unwrap();
+    }
+    let both = mio::Interest::READABLE | mio::Interest::WRITABLE;
+    let mut a = EpollSide::new(mio::net::TcpStream::from_std(a), both);
+    let mut b = EpollSide::new(mio::net::TcpStream::from_std(b), both);
+    let msg = [7u8; 24];
+    let mut buf = vec![0u8; 4096];
+    move || {
+        let mut ping = true;
+        spin_until(LIMIT, || {
+            // Client pass: poll, read the pong if it came, send the ping if it is queued.
+            let answered = a.readable() && read_message(&mut a.sock, &mut buf);
+            if ping {
+                a.sock.write_all(&msg).unwrap();
+                ping = false;
+            }
+            if answered {
+                return true;
+            }
+            // Server pass: poll, read the ping, reply.
+            if b.readable() && read_message(&mut b.sock, &mut buf) {
+                b.sock.write_all(&buf[..24]).unwrap();
+            }
+            false
+        });
+    }
+}
+
+/// Receives one 24-byte datagram if there is one.
+fn recv_datagram(s: &mio::net::UdpSocket, buf: &mut [u8]) -> bool {
+    match s.recv(buf) {
+        Ok(n) => {
+            assert_eq!(n, 24);
+            true
+        }
+        Err(e) if e.kind() == ErrorKind::WouldBlock => false,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Raw UDP through two epoll loops, in the passes of the VRPN scenarios. With `drain`, each
+/// side reads after every datagram until the socket says `WouldBlock`, as an edge-triggered
+/// loop must when it cannot know that one datagram was all (the library proves it with a
+/// two-slot `recvmmsg` instead).
+fn epoll_udp(drain: bool) -> impl FnMut() {
+    let a = UdpSocket::bind((Ipv4Addr::LOCALHOST, 0)).unwrap();
+    let b = UdpSocket::bind((Ipv4Addr::LOCALHOST, 0)).unwrap();
+    a.connect(b.local_addr().unwrap()).unwrap();
+    b.connect(a.local_addr().unwrap()).unwrap();
+    a.set_nonblocking(true).unwrap();
+    b.set_nonblocking(true).unwrap();
+    let mut a = EpollSide::new(mio::net::UdpSocket::from_std(a), mio::Interest::READABLE);
+    let mut b = EpollSide::new(mio::net::UdpSocket::from_std(b), mio::Interest::READABLE);
+    let msg = [7u8; 24];
+    let mut buf = [0u8; 64];
+    let mut spare = [0u8; 64];
+    move || {
+        let mut ping = true;
+        spin_until(LIMIT, || {
+            let answered = a.readable() && recv_datagram(&a.sock, &mut buf);
+            if answered && drain {
+                assert!(!recv_datagram(&a.sock, &mut spare));
+            }
+            if ping {
+                a.sock.send(&msg).unwrap();
+                ping = false;
+            }
+            if answered {
+                return true;
+            }
+            if b.readable() && recv_datagram(&b.sock, &mut buf) {
+                if drain {
+                    assert!(!recv_datagram(&b.sock, &mut spare));
+                }
+                b.sock.send(&buf[..24]).unwrap();
+            }
+            false
+        });
     }
 }
 
@@ -186,6 +327,12 @@ fn main() {
     let mut scenarios: Vec<Scenario> = vec![
         ("raw TCP 24 B ping-pong", Box::new(raw_tcp())),
         ("raw UDP 24 B ping-pong", Box::new(raw_udp())),
+        ("raw TCP through epoll, 3 passes", Box::new(epoll_tcp())),
+        (
+            "raw UDP through epoll, 3 passes",
+            Box::new(epoll_udp(false)),
+        ),
+        ("raw UDP through epoll, drained", Box::new(epoll_udp(true))),
         (
             "vrpn tcp:// ping→pong (TCP)",
             Box::new(|| tcp_pair.round_trip(tcp_pair.ping, class::RELIABLE)),
@@ -229,9 +376,24 @@ fn main() {
         x.print_us();
         println!("    UDP datagrams sent during the measurement (whole host): {d}");
     }
-    if s.len() == 5 {
-        common::print_ratio(&s[2], &s[0], 1.3);
-        common::print_ratio(&s[3], &s[0], 1.3);
-        common::print_ratio(&s[4], &s[1], 1.3);
+    // The targets against the raw loops; against the epoll loops, what the library
+    // adds to any reactor (no target: printed against 1.0).
+    let find = |prefix: &str| s.iter().find(|x| x.name.starts_with(prefix));
+    let ratios = [
+        ("vrpn tcp://", "raw TCP 24", 1.15),
+        ("vrpn udp path ping", "raw TCP 24", 1.15),
+        ("vrpn udp path LOW", "raw UDP 24", 1.3),
+        ("raw TCP through", "raw TCP 24", 1.0),
+        ("raw UDP through epoll, 3", "raw UDP 24", 1.0),
+        ("raw UDP through epoll, d", "raw UDP 24", 1.0),
+        ("vrpn tcp://", "raw TCP through", 1.0),
+        ("vrpn udp path ping", "raw TCP through", 1.0),
+        ("vrpn udp path LOW", "raw UDP through epoll, 3", 1.0),
+        ("vrpn udp path LOW", "raw UDP through epoll, d", 1.0),
+    ];
+    for (what, base, target) in ratios {
+        if let (Some(w), Some(b)) = (find(what), find(base)) {
+            common::print_ratio(w, b, target);
+        }
     }
 }

@@ -6,59 +6,18 @@
 //! within its stated uncertainty. Run with `--nocapture` to see the accuracy and overhead
 //! figures; `cost_per_exchange` (ignored by default) measures CPU time in a release build.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+
 use std::time::{Duration, Instant};
 
+use counting_alloc::allocations_in;
 use vrpn::proto::clock::{
     ClockSync, ClockSyncConfig, ClockSyncStats, Estimate, Query, Reply, ReplyOutcome,
 };
 use vrpn::sim::Rng;
 use vrpn::wire::{padded_len, HEADER_LEN};
 use vrpn::{Now, TimeVal};
-
-/// Counts allocations made by the current thread while enabled.
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_alloc() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_alloc();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations_in(f: impl FnOnce()) -> u64 {
-    COUNT.with(|c| c.set(0));
-    ENABLED.with(|e| e.set(true));
-    f();
-    ENABLED.with(|e| e.set(false));
-    COUNT.with(Cell::get)
-}
 
 const NS_PER_SEC: u64 = 1_000_000_000;
 const MINUTE: u64 = 60 * NS_PER_SEC;

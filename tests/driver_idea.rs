@@ -17,9 +17,13 @@ use std::time::{Duration, Instant};
 use vrpn::devices::analog_output::AnalogOutputRemote;
 use vrpn::driver::Interface;
 use vrpn::drivers::idea::sim::{IdeaSim, SimConfig};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
+
+#[path = "common/output_rig.rs"]
+mod output_rig;
+use output_rig::{Device, OutputRig};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -85,47 +89,6 @@ fn told_buttons(sim: &SimulatedDevice<IdeaSim>) -> (Vec<(usize, bool)>, Vec<Inst
     out.into_iter().unzip()
 }
 
-struct Rig {
-    sim: SimulatedDevice<IdeaSim>,
-    server: ServerProcess,
-    client: Client,
-    out: AnalogOutputRemote,
-    t0: Now,
-    moves: i32,
-}
-
-impl Rig {
-    /// Asks for `n` moves, each once the previous one's target was reported.
-    fn moves(&mut self, n: usize) {
-        for _ in 0..n {
-            let k = self.moves;
-            self.moves += 1;
-            let to = -100.0 - f64::from(k * 73 % 400);
-            self.out.request_change_channel_value(0, to).unwrap();
-            let out = &self.out;
-            self.client
-                .wait_until(Duration::from_secs(5), "a move made", &self.server, |c| {
-                    let _ = out.mainloop();
-                    positions(c, 0).0.last() == Some(&to)
-                });
-        }
-    }
-
-    /// Positions from log index `from` on are a run of the changes told from `after` on.
-    fn check(&self, from: usize, after: usize) {
-        let (want, at) = told(&self.sim);
-        let (got, stamps) = positions(&self.client, from);
-        let runs = assert_run_of(&got, &want, after, "IDEA positions");
-        assert_first_byte_stamps(
-            &stamps,
-            &at[runs[0]..],
-            self.t0,
-            Duration::from_millis(250),
-            "IDEA",
-        );
-    }
-}
-
 #[test]
 fn idea_drive_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("idea", || {
@@ -137,28 +100,25 @@ fn idea_drive_through_vrpn_server_to_a_client() {
     .unwrap();
     // Answers come 2 ms after their request: a gap of 1 ms marks one.
     sim.set_junk_idle(Duration::from_millis(1));
-    let t0 = Now::read();
-    let line = format!(
-        "vrpn_IDEA Idea0 {} 3200 1200 2000 40000 100000 290 0 290 290 50 8 1 -1 0 0 0 0 50 \
-         0.5 -60.0\n",
-        sim.path().display()
-    );
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect(
-        "Idea0",
-        server.port(),
-        &[Interface::Analog, Interface::Button],
-    )
-    .unwrap();
-    let out = AnalogOutputRemote::new(&format!("Idea0@tcp://127.0.0.1:{}", server.port())).unwrap();
-    let mut r = Rig {
-        sim,
-        server,
-        client,
-        out,
-        t0,
-        moves: 0,
+    let device = Device {
+        what: "IDEA positions",
+        reports: positions,
+        sent: told,
+        request: |k| (0, -100.0 - f64::from(k * 73 % 400)),
     };
+    let mut r = OutputRig::start_with(
+        sim,
+        SERVER,
+        "vrpn_IDEA Idea0 {PATH} 3200 1200 2000 40000 100000 290 0 290 290 50 8 1 -1 0 0 0 0 50 \
+         0.5 -60.0\n",
+        "Idea0",
+        &[Interface::Analog, Interface::Button],
+        device,
+        |at| AnalogOutputRemote::new(at).unwrap(),
+    );
+    let t0 = r.t0;
+    // Each move is made once its target is reported.
+    let reached = |p: &f64, to: f64| *p == to;
 
     // 1. Start-up: the hunt ends at the rail (input 1 closed), set to -60 steps.
     // (A report of 0 may come first: the answer to the remote's ping, before the reset.)
@@ -189,7 +149,7 @@ fn idea_drive_through_vrpn_server_to_a_client() {
         });
     assert_eq!(r.sim.model(|m| m.moves()), moved);
     let from = r.client.len();
-    r.moves(12);
+    r.moves_to(12, reached);
     r.check(from, 0);
     // Inputs 2 and 3 pressed, then released.
     for bits in [0b0110, 0] {
@@ -215,50 +175,21 @@ fn idea_drive_through_vrpn_server_to_a_client() {
 
     // 2. Garbage between answers.
     let junk: [&[u8]; 4] = [b"zz", b"`", b"`l12\r`x", b"\r\n"];
-    r.sim.inject_between_records(&junk);
-    r.client.wait_until(
-        Duration::from_secs(5),
-        "the garbage sent",
-        &r.server,
-        |_| r.sim.injected() == junk.len(),
-    );
-    r.moves(6);
+    r.inject_garbage(&junk, Duration::from_secs(5));
+    r.moves_to(6, reached);
     r.check(from, 0);
     r.client
         .wait_text(0, "skipped", Duration::from_secs(2), &r.server);
 
     // 3. Silence: reset on the open port, then moves again.
-    let (from, logged) = (r.client.len(), told(&r.sim).0.len());
-    r.sim.set_mute(true);
-    r.client.wait_text(
-        from,
+    r.silence_then(
         "Timeout, resetting",
         Duration::from_secs(5),
-        &r.server,
+        "reset complete",
+        Duration::from_secs(6),
+        |r| r.moves_to(6, reached),
     );
-    r.sim.set_mute(false);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(6);
-    r.check(after_reset, logged);
-    assert!(!r
-        .client
-        .texts_from(from)
-        .iter()
-        .any(|t| t.contains("is open again")));
 
     // 4. Unplugged: reported, reopened when back, reset, moves again.
-    let (from, logged) = (r.client.len(), told(&r.sim).0.len());
-    r.sim.unplug();
-    r.client
-        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
-    r.sim.plug().unwrap();
-    r.client
-        .wait_text(from, "is open again", Duration::from_secs(6), &r.server);
-    r.client
-        .wait_text(from, "reset complete", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(6);
-    r.check(after_reset, logged);
+    r.unplug_then("reset complete", |r| r.moves_to(6, reached));
 }

@@ -3,17 +3,19 @@
 //! Dial. Checked against the simulator's own log: exact reports in order with first-byte
 //! stamps, the lights following the toggles, garbage, a quiet line, unplugging.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use vrpn::driver::Interface;
 use vrpn::drivers::sgibox::sim::{expected, Report, SgiSim, SimConfig};
-use vrpn::sim::rig::{Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
 
+#[path = "common/event_rig.rs"]
+mod event_rig;
 #[path = "common/events.rs"]
 mod events;
-use events::{check_run, first_from};
+use event_rig::{Device, EventRig};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 const TOGGLES: [u32; 4] = [0, 1, 2, 3];
@@ -38,7 +40,8 @@ fn heard(c: &Client, from: usize) -> Vec<(Report, TimeVal)> {
         .collect()
 }
 
-type Want = (Vec<(Report, Option<usize>)>, Vec<Instant>, u32);
+/// What the log implies, and the toggles that are on.
+type Want = (Vec<(Report, Option<usize>)>, Vec<std::time::Instant>, u32);
 
 fn want(sim: &SimulatedDevice<SgiSim>) -> Want {
     sim.model(|m| {
@@ -52,8 +55,10 @@ fn want(sim: &SimulatedDevice<SgiSim>) -> Want {
     })
 }
 
-fn logged(sim: &SimulatedDevice<SgiSim>) -> usize {
-    sim.model(|m| m.sent().len())
+/// What the log implies, for the rig.
+fn reports(sim: &SimulatedDevice<SgiSim>) -> event_rig::Want<Report> {
+    let (w, at, _) = want(sim);
+    (w, at)
 }
 
 #[test]
@@ -64,121 +69,62 @@ fn sgi_boxes_through_vrpn_server_to_a_client() {
         SgiSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!("vrpn_raw_SGIBox Sgibox0 {} 0 1 2 3\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let interfaces = [Interface::Button, Interface::Analog, Interface::Dial];
-    let client = Client::connect("Sgibox0", server.port(), &interfaces).unwrap();
-    let reports = |c: &Client| heard(c, 0).len();
+    let device = Device {
+        what: "SGI box",
+        heard,
+        want: reports,
+        skip_first: false,
+    };
+    let r = EventRig::start(
+        sim,
+        SERVER,
+        "vrpn_raw_SGIBox Sgibox0 {PATH} 0 1 2 3\n",
+        "Sgibox0",
+        &[Interface::Button, Interface::Analog, Interface::Dial],
+        device,
+    );
 
     // 1. Reset, enable, exact reports; the lights show the toggles that are on.
-    client.wait_until(Duration::from_secs(10), "a first report", &server, |c| {
-        reports(c) >= 1
-    });
-    let startup = heard(&client, 0)[0].1.seconds_since(t0.wall);
-    eprintln!(
-        "vrpn_raw_SGIBox: vrpn_server start to first report {:.0} ms",
-        startup * 1e3
-    );
-    client.wait_until(Duration::from_secs(10), "150 reports", &server, |c| {
-        reports(c) >= 150
-    });
-    let (w, at, _) = want(&sim);
-    check_run(&heard(&client, 0), &w, &at, 0, false, t0, "SGI box");
+    r.start_up("vrpn_raw_SGIBox", 150);
     // The lights follow the toggles (the light command goes out a few ms after a press).
     assert!(
-        client.pump_until(Duration::from_secs(1), |_| {
-            let (_, _, on) = want(&sim);
-            sim.model(|m| m.lights()) == on
+        r.client.pump_until(Duration::from_secs(1), |_| {
+            let (_, _, on) = want(&r.sim);
+            r.sim.model(|m| m.lights()) == on
         }),
         "the lights do not show the toggles"
     );
 
     // 2. Garbage between events: reported, nothing lost.
     let junk: [&[u8]; 3] = [&[0x01, 0x7F], &[0x45], &[0xBF, 0x10]];
-    sim.inject_between_records(&junk);
-    client.wait_until(Duration::from_secs(10), "the garbage sent", &server, |_| {
-        sim.injected() == junk.len()
-    });
-    let n = reports(&client);
-    client.wait_until(
-        Duration::from_secs(5),
-        "reports after garbage",
-        &server,
-        |c| reports(c) >= n + 60,
-    );
-    let (w, at, _) = want(&sim);
-    check_run(
-        &heard(&client, 0),
-        &w,
-        &at,
-        0,
-        false,
-        t0,
-        "SGI box after garbage",
-    );
-    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
+    r.garbage(&junk, 60);
 
     // 3. A quiet line is no failure (the boxes send only on events): nothing is invented.
-    let from = client.len();
-    sim.model(|m| m.mute = true);
-    client.pump_until(Duration::from_millis(1500), |_| false);
+    let from = r.client.len();
+    r.sim.model(|m| m.mute = true);
+    r.client.pump_until(Duration::from_millis(1500), |_| false);
     assert!(
-        heard(&client, from).len() <= 4,
+        heard(&r.client, from).len() <= 4,
         "at most the events in flight: {:?}",
-        heard(&client, from)
+        heard(&r.client, from)
     );
-    sim.model(|m| m.mute = false);
-    client.wait_until(
+    r.sim.model(|m| m.mute = false);
+    r.client.wait_until(
         Duration::from_secs(5),
         "reports after silence",
-        &server,
+        &r.server,
         |c| heard(c, from).len() >= 40,
     );
-    let (w, at, _) = want(&sim);
-    check_run(
-        &heard(&client, 0),
-        &w,
-        &at,
-        0,
-        false,
-        t0,
-        "SGI box after silence",
-    );
+    r.check(&r.heard(0), 0, "SGI box after silence");
 
     // 4. Unplugged: reported, nothing while unplugged, reopened, reset, resumed. The boxes
     // make no events meanwhile (a press lost on the way would leave a toggle wrong for good,
     // on any driver); the reset sent when the port opens again goes unanswered, the next
     // one is answered.
-    let (from, before) = (client.len(), logged(&sim));
-    sim.model(|m| m.mute = true);
-    sim.unplug();
-    client.wait_text(from, "failed", Duration::from_secs(3), &server);
-    let while_unplugged = heard(&client, from).len();
-    client.pump_until(Duration::from_millis(500), |_| false);
-    assert_eq!(
-        heard(&client, from).len(),
-        while_unplugged,
-        "reports while unplugged"
-    );
-    sim.plug().unwrap();
-    client.wait_text(from, "is open again", Duration::from_secs(3), &server);
-    sim.model(|m| m.mute = false);
-    client.wait_until(
+    r.unplug(
+        40,
         Duration::from_secs(8),
-        "reports after plugging back",
-        &server,
-        |c| heard(c, from).len() >= while_unplugged + 40,
-    );
-    let (w, at, _) = want(&sim);
-    let after = first_from(&w, before);
-    check_run(
-        &heard(&client, from)[while_unplugged..],
-        &w,
-        &at,
-        after,
-        false,
-        t0,
-        "SGI box after unplugging",
+        |sim| sim.model(|m| m.mute = true),
+        |sim| sim.model(|m| m.mute = false),
     );
 }

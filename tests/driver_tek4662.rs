@@ -9,9 +9,13 @@ use std::time::{Duration, Instant};
 use vrpn::devices::poser::PoserRemote;
 use vrpn::driver::Interface;
 use vrpn::drivers::tek4662::sim::{count_metres, PlotterSim, SimConfig};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
+
+#[path = "common/output_rig.rs"]
+mod output_rig;
+use output_rig::{Device, OutputRig};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -38,69 +42,45 @@ fn sent(sim: &SimulatedDevice<PlotterSim>) -> (Vec<[f64; 3]>, Vec<Instant>) {
     sim.model(|m| m.sent().iter().map(|s| (s.metres, s.at)).unzip())
 }
 
-struct Rig {
-    sim: SimulatedDevice<PlotterSim>,
-    server: ServerProcess,
-    client: Client,
-    poser: PoserRemote,
-    t0: Now,
-    moves: u16,
+type Rig = OutputRig<PlotterSim, [f64; 3], PoserRemote>;
+
+/// Asks for `n` poses, each once the previous was carried out and reported.
+fn moves(r: &mut Rig, n: usize) {
+    r.sim.model(|m| m.set_wander(false));
+    for _ in 0..n {
+        let k = r.moves as u16;
+        r.moves += 1;
+        let (x, y) = ((k * 997 + 13) % 4096, (k * 613 + 7) % 2731);
+        // The middle of the count: the driver rounds down to it.
+        let m = |c: u16| (f64::from(c) + 0.5) / COUNTS_PER_METER;
+        r.out
+            .request_pose(TimeVal::now(), [m(x), m(y), 0.0], [0.0, 0.0, 0.0, 1.0])
+            .unwrap();
+        let want = [count_metres(x), count_metres(y), 0.0];
+        let poser = &r.out;
+        r.client.wait_until(
+            Duration::from_secs(10),
+            &format!("the pen at ({x}, {y})"),
+            &r.server,
+            |c| {
+                let _ = poser.mainloop();
+                poses(c, 0).0.last() == Some(&want)
+            },
+        );
+        assert_eq!(r.sim.model(|m| m.pen()), (x, y));
+    }
 }
 
-impl Rig {
-    /// Asks for `n` poses, each once the previous was carried out and reported.
-    fn moves(&mut self, n: usize) {
-        self.sim.model(|m| m.set_wander(false));
-        for _ in 0..n {
-            let k = self.moves;
-            self.moves += 1;
-            let (x, y) = ((k * 997 + 13) % 4096, (k * 613 + 7) % 2731);
-            // The middle of the count: the driver rounds down to it.
-            let m = |c: u16| (f64::from(c) + 0.5) / COUNTS_PER_METER;
-            self.poser
-                .request_pose(TimeVal::now(), [m(x), m(y), 0.0], [0.0, 0.0, 0.0, 1.0])
-                .unwrap();
-            let want = [count_metres(x), count_metres(y), 0.0];
-            let poser = &self.poser;
-            self.client.wait_until(
-                Duration::from_secs(10),
-                &format!("the pen at ({x}, {y})"),
-                &self.server,
-                |c| {
-                    let _ = poser.mainloop();
-                    poses(c, 0).0.last() == Some(&want)
-                },
-            );
-            assert_eq!(self.sim.model(|m| m.pen()), (x, y));
-        }
-    }
-
-    /// Lets the joystick wander for `n` answers.
-    fn wander(&mut self, n: usize) {
-        self.sim.model(|m| m.set_wander(true));
-        let heard = poses(&self.client, 0).0.len();
-        self.client.wait_until(
-            Duration::from_secs(10),
-            "the wandering pen",
-            &self.server,
-            |c| poses(c, 0).0.len() >= heard + n,
-        );
-    }
-
-    /// Reports from log index `from` on are a run of the answers from `after` on, stamped
-    /// with their first bytes.
-    fn check(&self, from: usize, after: usize) {
-        let (want, at) = sent(&self.sim);
-        let (got, stamps) = poses(&self.client, from);
-        let runs = assert_run_of(&got, &want, after, "Tek4662 pen");
-        assert_first_byte_stamps(
-            &stamps,
-            &at[runs[0]..],
-            self.t0,
-            Duration::from_millis(250),
-            "Tek4662",
-        );
-    }
+/// Lets the joystick wander for `n` answers.
+fn wander(r: &mut Rig, n: usize) {
+    r.sim.model(|m| m.set_wander(true));
+    let heard = poses(&r.client, 0).0.len();
+    r.client.wait_until(
+        Duration::from_secs(10),
+        "the wandering pen",
+        &r.server,
+        |c| poses(c, 0).0.len() >= heard + n,
+    );
 }
 
 #[test]
@@ -113,19 +93,22 @@ fn tek4662_plotter_through_vrpn_server_to_a_client() {
     .unwrap();
     // Bytes of an answer come 8.3 ms apart at 1200 baud.
     sim.set_junk_idle(Duration::from_millis(40));
-    let t0 = Now::read();
-    let line = format!("vrpn_Tek4662 Tek0 {} 1200\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect("Tek0", server.port(), &[Interface::Tracker]).unwrap();
-    let poser = PoserRemote::new(&format!("Tek0@tcp://127.0.0.1:{}", server.port())).unwrap();
-    let mut r = Rig {
-        sim,
-        server,
-        client,
-        poser,
-        t0,
-        moves: 0,
+    let device = Device {
+        what: "Tek4662 pen",
+        reports: poses,
+        sent,
+        request: |_| unreachable!("the plotter is asked for poses, through its Poser"),
     };
+    let mut r = OutputRig::start_with(
+        sim,
+        SERVER,
+        "vrpn_Tek4662 Tek0 {PATH} 1200\n",
+        "Tek0",
+        &[Interface::Tracker],
+        device,
+        |at| PoserRemote::new(at).unwrap(),
+    );
+    let t0 = r.t0;
 
     // 1. Start-up: the pen where it was; the joystick's wandering followed; poses.
     r.client
@@ -140,55 +123,41 @@ fn tek4662_plotter_through_vrpn_server_to_a_client() {
     assert_eq!(first[0], [count_metres(1000), count_metres(500), 0.0]);
     r.client
         .wait_text(0, "Reset correctly", Duration::from_secs(1), &r.server);
-    r.wander(8);
-    r.moves(12);
+    wander(&mut r, 8);
+    moves(&mut r, 12);
     r.check(0, 0);
 
     // 2. Garbage between answers.
     let junk: [&[u8]; 3] = [b"zz", b"\x00\xff", b"12"];
     r.sim.inject_between_records(&junk);
-    r.wander(1);
+    wander(&mut r, 1);
     r.client.wait_until(
         Duration::from_secs(10),
         "the garbage sent",
         &r.server,
         |_| r.sim.injected() == junk.len(),
     );
-    r.wander(4);
-    r.moves(4);
+    wander(&mut r, 4);
+    moves(&mut r, 4);
     r.check(0, 0);
     r.client
         .wait_text(0, "skipped", Duration::from_secs(2), &r.server);
 
     // 3. Silence: reset on the open port after 5 s; positions and poses again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.set_mute(true);
-    r.client.wait_text(
-        from,
+    r.silence_then(
         "Device timeout (resetting)",
         Duration::from_secs(8),
-        &r.server,
+        "Reset correctly",
+        Duration::from_secs(5),
+        |r| {
+            moves(r, 4);
+            wander(r, 4);
+        },
     );
-    r.sim.set_mute(false);
-    r.client
-        .wait_text(from, "Reset correctly", Duration::from_secs(5), &r.server);
-    let after_reset = r.client.len();
-    r.moves(4);
-    r.wander(4);
-    r.check(after_reset, logged);
 
     // 4. Unplugged: reported, reopened when back, reset, poses again.
-    let (from, logged) = (r.client.len(), sent(&r.sim).0.len());
-    r.sim.unplug();
-    r.client
-        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
-    r.sim.plug().unwrap();
-    r.client
-        .wait_text(from, "is open again", Duration::from_secs(6), &r.server);
-    r.client
-        .wait_text(from, "Reset correctly", Duration::from_secs(6), &r.server);
-    let after_reset = r.client.len();
-    r.moves(4);
-    r.wander(4);
-    r.check(after_reset, logged);
+    r.unplug_then("Reset correctly", |r| {
+        moves(r, 4);
+        wander(r, 4);
+    });
 }

@@ -6,58 +6,18 @@
 use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
-use vrpn::drivers::yei::sim::{Sent, SimConfig, YeiSim};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::drivers::yei::sim::{SimConfig, YeiSim};
+use vrpn::sim::rig::{Client, ServerProcess};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::Now;
+
+#[path = "common/faults.rs"]
+mod faults;
+#[path = "common/yei_reports.rs"]
+mod yei_reports;
+use yei_reports::count;
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
-
-#[derive(Clone, Debug, PartialEq)]
-enum Value {
-    Pose(usize, [f64; 4]),
-    Analog(Vec<f64>),
-    Button(usize, bool),
-}
-
-/// What the client must hear for the records `sent`, from all buttons released on.
-fn expected(sent: &[Sent]) -> (Vec<Value>, Vec<Instant>) {
-    let mut out = Vec::new();
-    let mut buttons = 0u8;
-    for s in sent {
-        let t = s.first_byte;
-        out.push((Value::Pose(0, s.quats[0]), t));
-        out.push((Value::Pose(1, s.quats[1]), t));
-        out.push((Value::Analog(s.channels.to_vec()), t));
-        for i in 0..8 {
-            if (buttons ^ s.buttons) & (1 << i) != 0 {
-                out.push((Value::Button(i, s.buttons & (1 << i) != 0), t));
-            }
-        }
-        buttons = s.buttons;
-    }
-    out.into_iter().unzip()
-}
-
-fn heard(client: &Client, from: usize) -> (Vec<Value>, Vec<TimeVal>) {
-    client
-        .reports_from(from)
-        .into_iter()
-        .filter_map(|h| match h {
-            Heard::Pose(p) => {
-                let q = p.quat.coords;
-                Some((Value::Pose(p.sensor, [q.x, q.y, q.z, q.w]), p.time))
-            }
-            Heard::Analog { channels, time } => Some((Value::Analog(channels), time)),
-            Heard::Button {
-                button,
-                pressed,
-                time,
-            } => Some((Value::Button(button, pressed), time)),
-            _ => None,
-        })
-        .unzip()
-}
 
 #[test]
 fn yei_through_vrpn_server_to_a_client() {
@@ -79,23 +39,11 @@ fn yei_through_vrpn_server_to_a_client() {
         &[Interface::Tracker, Interface::Analog, Interface::Button],
     )
     .unwrap();
-    let count = |c: &Client, from: usize| heard(c, from).0.len();
     client.wait_until(Duration::from_secs(10), "reports", &server, |c| {
         count(c, 0) >= 200
     });
     let started = Instant::now();
-    let check = || {
-        let (want, at) = sim.model(|m| expected(m.sent()));
-        let (got, stamps) = heard(&client, 0);
-        let runs = assert_run_of(&got, &want, 0, "YEI");
-        assert_first_byte_stamps(
-            &stamps,
-            &at[runs[0]..],
-            t0,
-            Duration::from_millis(250),
-            "YEI",
-        );
-    };
+    let check = || yei_reports::check(&sim, &client, 0, t0, "YEI");
     check();
     let setup = sim.model(|m| {
         let u = &m.units[0];
@@ -103,19 +51,8 @@ fn yei_through_vrpn_server_to_a_client() {
     });
     assert_eq!(setup, (1, 0, vec!["238,1,1,0".to_owned()], 0));
     let junk: [&[u8]; 3] = [b"A", &[0x7F, 0x55], &[0x3F, 0x80, 0, 0, 0x20]];
-    sim.inject_between_records(&junk);
-    client.wait_until(Duration::from_secs(5), "the garbage sent", &server, |_| {
-        sim.injected() == junk.len()
-    });
-    let have = count(&client, 0);
-    client.wait_until(
-        Duration::from_secs(5),
-        "reports after garbage",
-        &server,
-        |c| count(c, 0) >= have + 100,
-    );
+    faults::garbage_costs_nothing(&sim, &client, &server, &junk, count, 100);
     check();
-    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
     assert!(started.elapsed() < Duration::from_secs(60));
     // Silence: the 2 s timeout, a reset, records again when it speaks.
     let from = client.len();
@@ -134,16 +71,6 @@ fn yei_through_vrpn_server_to_a_client() {
         |c| count(c, from) >= 100,
     );
     // Unplugged: reported, reopened, set up again, resumed.
-    let from = client.len();
-    sim.unplug();
-    client.wait_text(from, "failed", Duration::from_secs(3), &server);
-    sim.plug().unwrap();
-    client.wait_until(
-        Duration::from_secs(8),
-        "reports after plugging back",
-        &server,
-        |c| count(c, from) >= 100,
-    );
-    client.wait_text(from, "is open again", Duration::from_secs(1), &server);
+    faults::unplugged_and_reopened(&sim, &client, &server, count, 100);
     assert_eq!(sim.model(|m| m.units[0].calibrations), 2);
 }

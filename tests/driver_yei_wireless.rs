@@ -7,62 +7,16 @@
 use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
-use vrpn::drivers::yei::sim::{Sent, SimConfig, YeiSim};
-use vrpn::sim::rig::{assert_first_byte_stamps, assert_run_of, Client, Heard, ServerProcess};
+use vrpn::drivers::yei::sim::{SimConfig, YeiSim};
+use vrpn::sim::rig::{Client, ServerProcess};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::Now;
+
+#[path = "common/yei_reports.rs"]
+mod yei_reports;
+use yei_reports::count;
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
-
-#[derive(Clone, Debug, PartialEq)]
-enum Value {
-    Pose(usize, [f64; 4]),
-    Analog(Vec<f64>),
-    Button(usize, bool),
-}
-
-/// What the client of `unit` must hear for the records `sent`, from all buttons released on.
-fn expected(sent: &[Sent], unit: usize) -> (Vec<Value>, Vec<Instant>) {
-    let mut out = Vec::new();
-    let mut buttons = 0u8;
-    for s in sent.iter().filter(|s| s.unit == unit) {
-        let t = s.first_byte;
-        out.push((Value::Pose(0, s.quats[0]), t));
-        out.push((Value::Pose(1, s.quats[1]), t));
-        out.push((Value::Analog(s.channels.to_vec()), t));
-        for i in 0..8 {
-            if (buttons ^ s.buttons) & (1 << i) != 0 {
-                out.push((Value::Button(i, s.buttons & (1 << i) != 0), t));
-            }
-        }
-        buttons = s.buttons;
-    }
-    out.into_iter().unzip()
-}
-
-fn heard(client: &Client, from: usize) -> (Vec<Value>, Vec<TimeVal>) {
-    client
-        .reports_from(from)
-        .into_iter()
-        .filter_map(|h| match h {
-            Heard::Pose(p) => {
-                let q = p.quat.coords;
-                Some((Value::Pose(p.sensor, [q.x, q.y, q.z, q.w]), p.time))
-            }
-            Heard::Analog { channels, time } => Some((Value::Analog(channels), time)),
-            Heard::Button {
-                button,
-                pressed,
-                time,
-            } => Some((Value::Button(button, pressed), time)),
-            _ => None,
-        })
-        .unzip()
-}
-
-fn count(c: &Client, from: usize) -> usize {
-    heard(c, from).0.len()
-}
 
 #[test]
 fn two_wireless_units_through_vrpn_server_to_clients() {
@@ -94,17 +48,7 @@ fn two_wireless_units_through_vrpn_server_to_clients() {
     let started = Instant::now();
     let check = || {
         for (u, client) in clients.iter().enumerate() {
-            let what = format!("YEI{u}");
-            let (want, at) = sim.model(move |m| expected(m.sent(), u));
-            let (got, stamps) = heard(client, 0);
-            let runs = assert_run_of(&got, &want, 0, &what);
-            assert_first_byte_stamps(
-                &stamps,
-                &at[runs[0]..],
-                t0,
-                Duration::from_millis(250),
-                &what,
-            );
+            yei_reports::check(&sim, client, u, t0, &format!("YEI{u}"));
         }
     };
     check();

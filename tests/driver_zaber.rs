@@ -78,13 +78,7 @@ fn zaber_chain_through_vrpn_server_to_a_client() {
 
     // 2. Garbage between answers.
     let junk: [&[u8]; 3] = [&[9, 9, 9], &[1, 99], &[0]];
-    r.sim.inject_between_records(&junk);
-    r.client.wait_until(
-        Duration::from_secs(5),
-        "the garbage sent",
-        &r.server,
-        |_| r.sim.injected() == junk.len(),
-    );
+    r.inject_garbage(&junk, Duration::from_secs(5));
     r.moves(10);
     r.check(from, 0);
     r.client

@@ -4,52 +4,21 @@
 //! pass of the server and the client once the targets have been seen (the first frames size
 //! the target lists).
 
-use std::alloc::{GlobalAlloc, Layout, System};
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+
 use std::cell::Cell;
 use std::net::{Ipv4Addr, SocketAddr};
 use std::rc::Rc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
+use counting_alloc::{COUNT, ENABLED};
 use vrpn::drivers::dtrack::config::{DTrack, Source};
 use vrpn::drivers::dtrack::sim::{Controller, Frame};
 use vrpn::drivers::dtrack::DTrackDevice;
 use vrpn::net::Reactor;
 use vrpn::ServerDevice;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, Limits, Now, TrackerRemote};
-
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 fn frame(k: u32) -> Vec<u8> {
     let d = SystemTime::now().duration_since(UNIX_EPOCH).unwrap();

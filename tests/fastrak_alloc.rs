@@ -2,87 +2,18 @@
 //! allocator around every driver call while an IS-900 with a wand and a stylus streams
 //! through it (pose, button and analog paths, split reads) on a virtual serial line.
 
-use std::alloc::{GlobalAlloc, Layout, System};
+#[path = "common/counted_driver.rs"]
+mod counted_driver;
+
 use std::cell::Cell;
 use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use vrpn::driver::Lifecycle;
+use counted_driver::{Counted, COUNT};
 use vrpn::drivers::fastrak::sim::{FastrakSim, SimConfig};
-use vrpn::drivers::fastrak::FastrakProtocol;
-use vrpn::serial::{PortKind, PortOps, SerialDriver};
 use vrpn::server::config::parse_one;
 use vrpn::sim::VirtualLine;
-use vrpn::{AnalogRemote, ButtonRemote, Connection, Now, TimeVal, TrackerRemote};
-
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_alloc() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_alloc();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Counts allocations made inside the wrapped driver's calls only (the simulator and the
-/// virtual line allocate freely).
-struct Counted(Lifecycle<FastrakProtocol>);
-
-fn counted<T>(f: impl FnOnce() -> T) -> T {
-    ENABLED.with(|e| e.set(true));
-    let out = f();
-    ENABLED.with(|e| e.set(false));
-    out
-}
-
-impl SerialDriver for Counted {
-    fn name(&self) -> &str {
-        self.0.name()
-    }
-    fn port_kind(&self) -> PortKind {
-        self.0.port_kind()
-    }
-    fn opened(&mut self, now: Now, port: &mut PortOps) {
-        self.0.opened(now, port)
-    }
-    fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps) {
-        counted(|| self.0.received(bytes, arrived, port))
-    }
-    fn poll(&mut self, now: Now, port: &mut PortOps) {
-        counted(|| self.0.poll(now, port))
-    }
-    fn next_deadline(&self) -> Option<Instant> {
-        self.0.next_deadline()
-    }
-    fn closed(&mut self, now: Now) {
-        self.0.closed(now)
-    }
-}
+use vrpn::{AnalogRemote, ButtonRemote, Connection, TrackerRemote};
 
 #[test]
 fn streaming_records_allocates_nothing() {
@@ -111,10 +42,7 @@ fn streaming_records_allocates_nothing() {
     let a = analogs.clone();
     wand_analog.on_report(move |_| a.set(a.get() + 1));
 
-    let start = Now {
-        mono: Instant::now(),
-        wall: TimeVal::new(1_700_000_000, 0),
-    };
+    let start = counted_driver::start();
     let mut line = VirtualLine::new(
         Counted(driver),
         FastrakSim::new(SimConfig::new(115_200)),

@@ -5,50 +5,19 @@
 //! that are not JSON, and unknown fields holding nested arrays or objects, cost serde_json one
 //! allocation each (its error value; its stack for skipping): that bound is checked too.
 
-use std::alloc::{GlobalAlloc, Layout, System};
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+
 use std::cell::Cell;
 use std::net::{Ipv4Addr, UdpSocket};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use counting_alloc::{COUNT, ENABLED};
 use vrpn::drivers::jsonnet::{JsonNet, JsonNetDevice};
 use vrpn::net::Reactor;
 use vrpn::ServerDevice;
 use vrpn::{AnalogRemote, ButtonRemote, Connection, Limits, Now, TextReceiver, TrackerRemote};
-
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// The datagrams of round `k`, written into `out` (the sender's buffers are not counted).
 fn round(k: u32, out: &mut Vec<Vec<u8>>) {

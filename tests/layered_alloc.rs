@@ -8,12 +8,16 @@
 //! counting global allocator covers every pass of the servers, the device and the client
 //! once each has sent and heard its first reports.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::net::Ipv4Addr;
-use std::rc::Rc;
-use std::time::{Duration, Instant};
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+#[path = "common/layered_rig.rs"]
+mod layered_rig;
 
+use std::cell::Cell;
+use std::rc::Rc;
+
+use counting_alloc::{count, counter_works};
+use layered_rig::Layered;
 use vrpn::config::DeviceRef;
 use vrpn::devices::analog_output::AnalogOutputServer;
 use vrpn::devices::poser::PoserRemote;
@@ -27,46 +31,10 @@ use vrpn::drivers::one_euro::filter::Params;
 use vrpn::drivers::one_euro::{FilterOneEuro, OneEuroDevice};
 use vrpn::drivers::poser_analog::{Axis, PoserAnalog, PoserAnalogDevice};
 use vrpn::layered::imu::AxisParams;
-use vrpn::net::Reactor;
 use vrpn::ServerDevice;
 use vrpn::{
-    AnalogRemote, AnalogServer, ButtonRemote, Connection, Limits, Now, TimeVal, TrackerRemote,
-    TrackerServer,
+    AnalogRemote, AnalogServer, ButtonRemote, Connection, TimeVal, TrackerRemote, TrackerServer,
 };
-
-struct Counting;
-
-thread_local! {
-    static ENABLED: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// What feeds the layered device.
 enum Upstream {
@@ -143,123 +111,54 @@ fn stream(
     least: u64,
     build: impl FnOnce(DeviceRef, &Connection) -> Box<dyn ServerDevice>,
 ) {
-    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
-    let reactor = Reactor::new().unwrap();
-    let server =
-        Connection::server_in(&reactor, Some(Ipv4Addr::LOCALHOST), 0, Limits::default()).unwrap();
-    let upstream_conn = if local {
-        server.clone()
-    } else {
-        Connection::server_in(&reactor, Some(Ipv4Addr::LOCALHOST), 0, Limits::default()).unwrap()
-    };
+    let rig = Layered::new(local);
     let mut upstream = if tracker_source {
-        Upstream::Tracker(TrackerServer::new("Src", &upstream_conn, 1).unwrap())
+        Upstream::Tracker(TrackerServer::new("Src", &rig.upstream, 1).unwrap())
     } else {
         Upstream::Analog(Box::new(
-            AnalogServer::new("Src", &upstream_conn, 16).unwrap(),
+            AnalogServer::new("Src", &rig.upstream, 16).unwrap(),
         ))
     };
-    let source = if local {
-        DeviceRef::Local("Src".into())
-    } else {
-        DeviceRef::Remote(format!(
-            "Src@127.0.0.1:{}",
-            upstream_conn.local_port().unwrap()
-        ))
-    };
-    let mut device = build(source, &server);
-    let client = Connection::client_in(
-        &reactor,
-        "127.0.0.1",
-        server.local_port().unwrap(),
-        false,
-        Limits::default(),
-    )
-    .unwrap();
+    let mut device = build(rig.source("Src"), &rig.server);
+    let client = rig.client();
     let heard = Rc::new(Cell::new(0u64));
     let _remote = listen(output, &client, &heard);
 
     let mut k = 0u32;
-    let mut pass = |counting: bool| {
-        ENABLED.with(|e| e.set(counting));
-        if !local {
-            let _ = upstream_conn.mainloop();
-        }
-        device.mainloop(Now::read());
-        let _ = server.mainloop();
-        let _ = client.mainloop();
-        ENABLED.with(|e| e.set(false));
-        reactor
-            .wait(device.next_deadline(), Duration::from_millis(1))
-            .unwrap();
+    let mut send = || {
+        k += 1;
+        upstream.send(k);
     };
-    // Warm up: connect, hear the first reports.
-    let start = Instant::now();
-    while heard.get() < 20 {
-        assert!(start.elapsed() < Duration::from_secs(20), "nothing heard");
-        k += 1;
-        upstream.send(k);
-        for _ in 0..5 {
-            pass(false);
-        }
-    }
+    let device = &mut *device;
+    rig.warm_up(
+        device,
+        &client,
+        &mut send,
+        || heard.get() >= 20,
+        "nothing heard",
+    );
     let before = heard.get();
-    COUNT.with(|c| c.set(0));
-    for _ in 0..300 {
-        k += 1;
-        ENABLED.with(|e| e.set(true));
-        upstream.send(k);
-        ENABLED.with(|e| e.set(false));
-        for _ in 0..3 {
-            pass(true);
-        }
-    }
-    let start = Instant::now();
-    while heard.get() < before + least && start.elapsed() < Duration::from_secs(10) {
-        pass(true);
-    }
+    rig.stream(device, &client, 300, &mut send, || {
+        heard.get() >= before + least
+    });
     assert!(
         heard.get() >= before + least,
         "heard {before} → {}",
         heard.get()
     );
-    assert_eq!(COUNT.with(Cell::get), 0, "allocations while streaming");
+    assert_eq!(count(), 0, "allocations while streaming");
     counter_works();
-}
-
-/// The counter sees an allocation (so that a count of 0 means something).
-fn counter_works() {
-    ENABLED.with(|e| e.set(true));
-    let b = std::hint::black_box(Box::new(7u64));
-    ENABLED.with(|e| e.set(false));
-    drop(b);
-    assert!(COUNT.with(Cell::get) > 0);
 }
 
 /// vrpn_Poser_Analog: 300 pose requests from a client, each driving three channels of the
 /// Analog_Output `Stage` and answered with a tracker report.
 fn poser(local: bool) {
-    vrpn::devices::base::set_print_threshold(vrpn::TextSeverity::Other(u32::MAX));
-    let reactor = Reactor::new().unwrap();
-    let server =
-        Connection::server_in(&reactor, Some(Ipv4Addr::LOCALHOST), 0, Limits::default()).unwrap();
-    let target_conn = if local {
-        server.clone()
-    } else {
-        Connection::server_in(&reactor, Some(Ipv4Addr::LOCALHOST), 0, Limits::default()).unwrap()
-    };
-    let stage = AnalogOutputServer::new("Stage", &target_conn, 3).unwrap();
+    let rig = Layered::new(local);
+    let stage = AnalogOutputServer::new("Stage", &rig.upstream, 3).unwrap();
     let requests = Rc::new(Cell::new(0u64));
     let r = requests.clone();
     stage.on_request(move |_| r.set(r.get() + 1));
-    let target = if local {
-        DeviceRef::Local("Stage".into())
-    } else {
-        DeviceRef::Remote(format!(
-            "Stage@127.0.0.1:{}",
-            target_conn.local_port().unwrap()
-        ))
-    };
+    let target = rig.source("Stage");
     let axis = |i: u32| Axis {
         device: (i < 3).then(|| target.clone()),
         channel: (i < 3).then_some(i),
@@ -273,15 +172,8 @@ fn poser(local: bool) {
         tracker_reports: true,
         axes: (0..6).map(axis).collect(),
     };
-    let mut device = PoserAnalogDevice::new(&cfg, &server).unwrap();
-    let client = Connection::client_in(
-        &reactor,
-        "127.0.0.1",
-        server.local_port().unwrap(),
-        false,
-        Limits::default(),
-    )
-    .unwrap();
+    let mut device = PoserAnalogDevice::new(&cfg, &rig.server).unwrap();
+    let client = rig.client();
     let poser = PoserRemote::on_connection("Out", &client).unwrap();
     let heard = Rc::new(Cell::new(0u64));
     let _remote = listen(Output::Tracker, &client, &heard);
@@ -298,43 +190,17 @@ fn poser(local: bool) {
             [0.0, half.sin(), 0.0, half.cos()],
         );
     };
-    let mut pass = |counting: bool| {
-        ENABLED.with(|e| e.set(counting));
-        if !local {
-            let _ = target_conn.mainloop();
-        }
-        device.mainloop(Now::read());
-        let _ = server.mainloop();
-        let _ = client.mainloop();
-        ENABLED.with(|e| e.set(false));
-        reactor
-            .wait(device.next_deadline(), Duration::from_millis(1))
-            .unwrap();
-    };
-    let start = Instant::now();
-    while heard.get() < 20 || requests.get() < 60 {
-        assert!(start.elapsed() < Duration::from_secs(20), "nothing heard");
-        send();
-        for _ in 0..5 {
-            pass(false);
-        }
-    }
+    rig.warm_up(
+        &mut device,
+        &client,
+        &mut send,
+        || heard.get() >= 20 && requests.get() >= 60,
+        "nothing heard",
+    );
     let (poses, changes) = (heard.get(), requests.get());
-    COUNT.with(|c| c.set(0));
-    for _ in 0..300 {
-        ENABLED.with(|e| e.set(true));
-        send();
-        ENABLED.with(|e| e.set(false));
-        for _ in 0..3 {
-            pass(true);
-        }
-    }
-    let start = Instant::now();
-    while (heard.get() < poses + 250 || requests.get() < changes + 750)
-        && start.elapsed() < Duration::from_secs(10)
-    {
-        pass(true);
-    }
+    rig.stream(&mut device, &client, 300, &mut send, || {
+        heard.get() >= poses + 250 && requests.get() >= changes + 750
+    });
     assert!(
         heard.get() >= poses + 250,
         "poses {poses} → {}",
@@ -345,7 +211,7 @@ fn poser(local: bool) {
         "channel changes {changes} → {}",
         requests.get()
     );
-    assert_eq!(COUNT.with(Cell::get), 0, "allocations while streaming");
+    assert_eq!(count(), 0, "allocations while streaming");
     counter_works();
 }
 

@@ -25,49 +25,37 @@ mod counted_driver;
 #[path = "common/streaming_alloc.rs"]
 mod streaming_alloc;
 use counted_driver::{counted, start, Counted, COUNT};
-use streaming_alloc::{count_reports, quiet_texts, stream};
+use streaming_alloc::{assert_streamed, count_reports, quiet_texts, rig, stream};
 
 #[test]
 fn radamec_streams_without_allocating() {
-    quiet_texts();
     let cfg: vrpn::drivers::radamec::Radamec = parse_one("vrpn_Radamec_SPI R0 /dev/ttyS0 38400\n");
-    let conn = Connection::new_loopback();
-    let (reports, _a, _b) = count_reports("R0", &conn);
-    let driver = cfg.lifecycle(&conn).unwrap();
-    let sim = RadamecSim::new(RadamecConfig::new());
-    let mut line = VirtualLine::new(Counted(driver), sim, start(), 5);
-    let (n, allocations) = stream(&mut line, &reports, &[0x01, 0xA1, 0x33], 5);
-    assert!(n >= 100, "{n} reports");
-    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+    let mut rig = rig("R0", RadamecSim::new(RadamecConfig::new()), 5, |conn| {
+        cfg.lifecycle(conn)
+    });
+    let (n, allocations) = stream(&mut rig.line, &rig.reports, &[0x01, 0xA1, 0x33], 5);
+    assert_streamed(n, 100, allocations);
 }
 
 #[test]
 fn sgibox_streams_without_allocating() {
-    quiet_texts();
     // Toggles too: their presses make Alerts and light commands.
     let cfg: vrpn::drivers::sgibox::SgiBox = parse_one("vrpn_raw_SGIBox S0 /dev/ttyS0 0 1 2 3\n");
-    let conn = Connection::new_loopback();
-    let (reports, _a, _b) = count_reports("S0", &conn);
-    let driver = cfg.lifecycle(&conn).unwrap();
-    let sim = SgiSim::new(SgiConfig::new());
-    let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
-    let (n, allocations) = stream(&mut line, &reports, &[0x01, 0x45, 0xBF], 5);
-    assert!(n >= 100, "{n} reports");
-    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+    let mut rig = rig("S0", SgiSim::new(SgiConfig::new()), 6, |conn| {
+        cfg.lifecycle(conn)
+    });
+    let (n, allocations) = stream(&mut rig.line, &rig.reports, &[0x01, 0x45, 0xBF], 5);
+    assert_streamed(n, 100, allocations);
 }
 
 #[test]
 fn tng3_streams_without_allocating() {
-    quiet_texts();
     let cfg: vrpn::drivers::tng3::Tng3 = parse_one("vrpn_Tng3 T0 /dev/ttyS0 8 8\n");
-    let conn = Connection::new_loopback();
-    let (reports, _a, _b) = count_reports("T0", &conn);
-    let driver = cfg.lifecycle(&conn).unwrap();
-    let sim = Tng3Sim::new(Tng3Config::new());
-    let mut line = VirtualLine::new(Counted(driver), sim, start(), 6);
-    let (n, allocations) = stream(&mut line, &reports, &[0x33, 0x55, 0x12], 5);
-    assert!(n >= 200, "{n} reports");
-    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+    let mut rig = rig("T0", Tng3Sim::new(Tng3Config::new()), 6, |conn| {
+        cfg.lifecycle(conn)
+    });
+    let (n, allocations) = stream(&mut rig.line, &rig.reports, &[0x33, 0x55, 0x12], 5);
+    assert_streamed(n, 200, allocations);
 }
 
 #[test]

@@ -40,18 +40,14 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use std::cell::RefCell;
-use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use self::command::{address, reported, write_command, Awaited, Matcher, Mode, Step};
-use crate::devices::analog_output::{AnalogOutputIds, AnalogOutputServer};
+use crate::devices::analog_output::{AnalogOutputServer, OutputRequests};
 use crate::devices::text::TextSeverity;
-use crate::dispatch::SenderFilter;
 use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Retry, Supervision};
 use crate::serial::{PortKind, PortSettings};
 use crate::time::Now;
-use crate::wire::payload::analog_output as codec;
 use crate::{AnalogServer, Connection, Error};
 
 pub use self::config::Atmel;
@@ -97,7 +93,7 @@ pub struct AtmelProtocol {
     analog: AnalogServer,
     _output: AnalogOutputServer,
     /// Values clients asked for since the last cycle began.
-    requests: Rc<RefCell<Vec<Option<f64>>>>,
+    requests: OutputRequests,
     /// What each channel reports (C++'s `channel`).
     channel: Vec<f64>,
     /// What each channel should be (C++'s `o_channel`): a difference is a write.
@@ -129,25 +125,9 @@ impl AtmelProtocol {
         let n = cfg.modes.len();
         let analog = AnalogServer::new(&cfg.name, conn, n)?;
         let output = AnalogOutputServer::new(&cfg.name, conn, n)?;
-        let requests: Rc<RefCell<Vec<Option<f64>>>> = Rc::new(RefCell::new(vec![None; n]));
         // The server half checks each request (an error text for a channel out of range);
-        // these keep the values asked for until the next cycle writes them.
-        let ids = AnalogOutputIds::register(conn)?;
-        let only = SenderFilter::Only(output.sender());
-        let r = requests.clone();
-        conn.register_handler(ids.change_request, only, move |m| {
-            if let Ok(req) = codec::ChangeRequest::decode(m.payload) {
-                store(&r, req.channel, req.value);
-            }
-        });
-        let r = requests.clone();
-        conn.register_handler(ids.change_channels_request, only, move |m| {
-            if let Ok(req) = codec::ChangeChannelsRequest::decode(m.payload) {
-                for (c, &v) in req.values[..req.count].iter().enumerate() {
-                    store(&r, c as i32, v);
-                }
-            }
-        });
+        // this keeps the values asked for until the next cycle writes them.
+        let requests = output.watch_requests(n, None)?;
         Ok(AtmelProtocol {
             baud: cfg.line_speed(),
             modes: cfg.modes.clone(),
@@ -180,10 +160,8 @@ impl AtmelProtocol {
         self.next = 0;
         self.first = None;
         self.exchanged = false;
-        for (c, r) in self.requests.borrow_mut().iter_mut().enumerate() {
-            if let Some(v) = r.take() {
-                self.out[c] = v;
-            }
+        while let Some((c, v)) = self.requests.take_next() {
+            self.out[c] = v;
         }
         self.step(cx);
     }
@@ -346,15 +324,6 @@ impl AtmelProtocol {
 
     fn timed_out(&self, now: Instant) -> bool {
         self.exchange.is_some_and(|ex| now >= ex.until)
-    }
-}
-
-/// Keeps a client's value for channel `c` until the next cycle.
-fn store(requests: &RefCell<Vec<Option<f64>>>, c: i32, v: f64) {
-    if let Ok(c) = usize::try_from(c) {
-        if let Some(slot) = requests.borrow_mut().get_mut(c) {
-            *slot = Some(v);
-        }
     }
 }
 

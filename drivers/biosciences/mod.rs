@@ -56,21 +56,16 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use std::cell::RefCell;
 use std::io::Write as _;
-use std::rc::Rc;
 use std::time::Instant;
 
 use self::config::BAUD;
 use self::reading::{Answer, Reader};
-use crate::devices::analog_output::{AnalogOutputIds, AnalogOutputServer};
-use crate::devices::base::PING_MESSAGE;
+use crate::devices::analog_output::{AnalogOutputServer, OutputRequests};
 use crate::devices::text::TextSeverity;
-use crate::dispatch::SenderFilter;
 use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Supervision};
 use crate::serial::{PortKind, PortSettings};
 use crate::wire::class;
-use crate::wire::payload::analog_output as codec;
 use crate::{AnalogServer, ButtonServer, Connection, Error};
 
 pub use self::config::Biosciences;
@@ -87,20 +82,14 @@ pub const READINGS: usize = 6;
 /// Output channels: two reference temperatures and control on/off.
 pub const OUTPUTS: usize = 3;
 
-/// What clients asked for and is not written yet (the last request per channel wins), and
-/// whether a client pinged.
-struct Requests {
-    target: [Option<f64>; OUTPUTS],
-    any: bool,
-    pinged: bool,
-}
-
 /// The controller's protocol. See the module documentation.
 pub struct BioProtocol {
     analog: AnalogServer,
     output: AnalogOutputServer,
     button: ButtonServer,
-    requests: Rc<RefCell<Requests>>,
+    /// Settings asked for, not written yet (the last request per channel wins), and pings
+    /// of the Analog.
+    requests: OutputRequests,
     /// The settings in force: reference temperatures and control.
     settings: [f64; OUTPUTS],
     reader: Reader,
@@ -128,42 +117,7 @@ impl BioProtocol {
         let output = AnalogOutputServer::new(&cfg.name, conn, OUTPUTS)?;
         let button = ButtonServer::new(&cfg.name, conn, 1)?;
         button.set_button(0, cfg.control);
-        let requests = Rc::new(RefCell::new(Requests {
-            target: [None; OUTPUTS],
-            any: false,
-            pinged: false,
-        }));
-        let ids = AnalogOutputIds::register(conn)?;
-        let only = SenderFilter::Only(output.sender());
-        let r = requests.clone();
-        conn.register_handler(ids.change_request, only, move |m| {
-            if let Ok(req) = codec::ChangeRequest::decode(m.payload) {
-                let mut r = r.borrow_mut();
-                if let Some(slot) = usize::try_from(req.channel)
-                    .ok()
-                    .and_then(|c| r.target.get_mut(c))
-                {
-                    *slot = Some(req.value);
-                    r.any = true;
-                }
-            }
-        });
-        let r = requests.clone();
-        conn.register_handler(ids.change_channels_request, only, move |m| {
-            if let Ok(req) = codec::ChangeChannelsRequest::decode(m.payload) {
-                let mut r = r.borrow_mut();
-                let n = req.count.min(OUTPUTS);
-                for (slot, &v) in r.target[..n].iter_mut().zip(&req.values[..n]) {
-                    *slot = Some(v);
-                }
-                r.any = true;
-            }
-        });
-        let ping = conn.register_type(PING_MESSAGE)?;
-        let r = requests.clone();
-        conn.register_handler(ping, SenderFilter::Only(analog.sender()), move |_| {
-            r.borrow_mut().pinged = true;
-        });
+        let requests = output.watch_requests(OUTPUTS, Some(analog.sender()))?;
         Ok(BioProtocol {
             analog,
             output,
@@ -206,21 +160,12 @@ impl BioProtocol {
 
     /// Writes what clients asked for, in channel order.
     fn send_requests(&mut self, cx: &mut Cx<'_>) {
-        let (targets, pinged) = {
-            let mut r = self.requests.borrow_mut();
-            let t = r.target;
-            r.target = [None; OUTPUTS];
-            r.any = false;
-            (t, std::mem::take(&mut r.pinged))
-        };
-        if pinged {
+        if self.requests.take_pinged() {
             let _ = self.analog.report(Some(cx.now.wall));
         }
-        for (i, t) in targets.iter().enumerate() {
-            if let Some(v) = *t {
-                self.settings[i] = v;
-                self.write_setting(i, cx);
-            }
+        while let Some((i, v)) = self.requests.take_next() {
+            self.settings[i] = v;
+            self.write_setting(i, cx);
         }
     }
 }
@@ -302,8 +247,7 @@ impl Protocol for BioProtocol {
     }
 
     fn deadline(&self) -> Option<Instant> {
-        let r = self.requests.borrow();
-        if r.any || r.pinged {
+        if self.requests.is_pending() {
             return self.last_now;
         }
         None

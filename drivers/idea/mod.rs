@@ -50,23 +50,18 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use std::cell::RefCell;
-use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use self::answer::{Answer, Framer};
 use self::config::BAUD;
 use self::moves::{write_move, Outcome};
 use self::reset::{Progress, ResetSequence};
-use crate::devices::analog_output::{AnalogOutputIds, AnalogOutputServer};
-use crate::devices::base::PING_MESSAGE;
+use crate::devices::analog_output::{AnalogOutputServer, OutputRequests};
 use crate::devices::text::TextSeverity;
-use crate::dispatch::SenderFilter;
 use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Retry, Supervision};
 use crate::serial::{PortKind, PortSettings};
 use crate::time::Now;
 use crate::wire::class;
-use crate::wire::payload::analog_output as codec;
 use crate::{AnalogServer, ButtonServer, Connection, Error};
 
 pub use self::config::Idea;
@@ -87,20 +82,14 @@ pub const TIMEOUT: Duration = Duration::from_secs(2);
 /// Pause before another attempt after a failed reset.
 pub const RETRY_DELAY: Duration = Duration::from_secs(1);
 
-/// What clients asked for, not yet written (the last move wins).
-#[derive(Default)]
-struct Requests {
-    target: Option<f64>,
-    pinged: bool,
-}
-
 /// The drive's protocol. See the module documentation.
 pub struct IdeaProtocol {
     cfg: Idea,
     analog: AnalogServer,
     _output: AnalogOutputServer,
     buttons: ButtonServer,
-    requests: Rc<RefCell<Requests>>,
+    /// Moves asked for, not yet written (the last one wins), and pings of the Analog.
+    requests: OutputRequests,
     reset: ResetSequence,
     framer: Framer,
     /// The last position read (1/64 steps) and input bits.
@@ -119,32 +108,9 @@ impl IdeaProtocol {
         analog.set_class_of_service(class::RELIABLE);
         let output = AnalogOutputServer::new(&cfg.name, conn, 1)?;
         let buttons = ButtonServer::new(&cfg.name, conn, BUTTONS)?;
-        let requests: Rc<RefCell<Requests>> = Rc::default();
         // The server half checks requests (and answers one for another channel with an
-        // error text); these see each one for channel 0 as it came.
-        let ids = AnalogOutputIds::register(conn)?;
-        let only = SenderFilter::Only(output.sender());
-        let r = requests.clone();
-        conn.register_handler(ids.change_request, only, move |m| {
-            if let Ok(req) = codec::ChangeRequest::decode(m.payload) {
-                if req.channel == 0 {
-                    r.borrow_mut().target = Some(req.value);
-                }
-            }
-        });
-        let r = requests.clone();
-        conn.register_handler(ids.change_channels_request, only, move |m| {
-            if let Ok(req) = codec::ChangeChannelsRequest::decode(m.payload) {
-                if req.count >= 1 {
-                    r.borrow_mut().target = Some(req.values[0]);
-                }
-            }
-        });
-        let ping = conn.register_type(PING_MESSAGE)?;
-        let r = requests.clone();
-        conn.register_handler(ping, SenderFilter::Only(analog.sender()), move |_| {
-            r.borrow_mut().pinged = true;
-        });
+        // error text); this sees each one for channel 0 as it came.
+        let requests = output.watch_requests(1, Some(analog.sender()))?;
         Ok(IdeaProtocol {
             cfg: cfg.clone(),
             analog,
@@ -220,12 +186,12 @@ impl IdeaProtocol {
 
     /// Writes the move asked for and answers a ping.
     fn send_requests(&mut self, cx: &mut Cx<'_>) {
-        let mut r = self.requests.borrow_mut();
-        if std::mem::take(&mut r.pinged) {
+        if self.requests.take_pinged() {
             let _ = self.analog.report(Some(cx.now.wall));
         }
-        let Some(to) = r.target.take() else { return };
-        drop(r);
+        let Some((_, to)) = self.requests.take_next() else {
+            return;
+        };
         let from = self.position();
         let outcome = write_move(&self.cfg, from, self.inputs, to, 1.0, &mut |b| cx.write(b));
         if outcome == Outcome::IntoLimit {
@@ -349,8 +315,7 @@ impl Protocol for IdeaProtocol {
     }
 
     fn deadline(&self) -> Option<Instant> {
-        let r = self.requests.borrow();
-        if r.target.is_some() || r.pinged {
+        if self.requests.is_pending() {
             return self.last_now;
         }
         self.reask_due()

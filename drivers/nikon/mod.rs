@@ -35,20 +35,15 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use std::cell::RefCell;
-use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use self::answer::{error_text, move_command, Answer, Framer, Step, ASK_FOCUS};
 use self::config::BAUD;
-use crate::devices::analog_output::{AnalogOutputIds, AnalogOutputServer};
-use crate::devices::base::PING_MESSAGE;
+use crate::devices::analog_output::{AnalogOutputServer, OutputRequests};
 use crate::devices::text::TextSeverity;
-use crate::dispatch::SenderFilter;
 use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Retry, Supervision};
 use crate::serial::{PortKind, PortSettings};
 use crate::time::Now;
-use crate::wire::payload::analog_output as codec;
 use crate::{AnalogServer, Connection, Error};
 
 pub use self::config::Nikon;
@@ -69,18 +64,12 @@ pub const TIMEOUT: Duration = Duration::from_secs(10);
 /// Pause before another attempt after a failed reset.
 pub const RETRY_DELAY: Duration = Duration::from_secs(1);
 
-/// What clients asked for, not yet written.
-#[derive(Default)]
-struct Requests {
-    focus: Option<f64>,
-    pinged: bool,
-}
-
 /// The microscope's protocol. See the module documentation.
 pub struct NikonProtocol {
     analog: AnalogServer,
     _output: AnalogOutputServer,
-    requests: Rc<RefCell<Requests>>,
+    /// Focus moves asked for, not yet written (the last one wins), and pings of the Analog.
+    requests: OutputRequests,
     framer: Framer,
     /// Where the last move asked the focus to go (reported when it gets there).
     requested: Option<i64>,
@@ -95,32 +84,9 @@ impl NikonProtocol {
     pub fn new(cfg: &Nikon, conn: &Connection) -> Result<NikonProtocol, Error> {
         let analog = AnalogServer::new(&cfg.name, conn, 1)?;
         let output = AnalogOutputServer::new(&cfg.name, conn, 1)?;
-        let requests: Rc<RefCell<Requests>> = Rc::default();
         // The server half checks requests (and answers one for another channel with an
-        // error text); these see each one for channel 0 as it came.
-        let ids = AnalogOutputIds::register(conn)?;
-        let only = SenderFilter::Only(output.sender());
-        let r = requests.clone();
-        conn.register_handler(ids.change_request, only, move |m| {
-            if let Ok(req) = codec::ChangeRequest::decode(m.payload) {
-                if req.channel == 0 {
-                    r.borrow_mut().focus = Some(req.value);
-                }
-            }
-        });
-        let r = requests.clone();
-        conn.register_handler(ids.change_channels_request, only, move |m| {
-            if let Ok(req) = codec::ChangeChannelsRequest::decode(m.payload) {
-                if req.count >= 1 {
-                    r.borrow_mut().focus = Some(req.values[0]);
-                }
-            }
-        });
-        let ping = conn.register_type(PING_MESSAGE)?;
-        let r = requests.clone();
-        conn.register_handler(ping, SenderFilter::Only(analog.sender()), move |_| {
-            r.borrow_mut().pinged = true;
-        });
+        // error text); this sees each one for channel 0 as it came.
+        let requests = output.watch_requests(1, Some(analog.sender()))?;
         Ok(NikonProtocol {
             analog,
             _output: output,
@@ -167,11 +133,10 @@ impl NikonProtocol {
 
     /// Writes the move asked for and answers a ping.
     fn send_requests(&mut self, cx: &mut Cx<'_>) {
-        let mut r = self.requests.borrow_mut();
-        if std::mem::take(&mut r.pinged) {
+        if self.requests.take_pinged() {
             let _ = self.analog.report(Some(cx.now.wall));
         }
-        if let Some(v) = r.focus.take() {
+        if let Some((_, v)) = self.requests.take_next() {
             // As C++: the value truncated to an integer (saturating).
             let ticks = v as i64;
             let mut cmd = [0u8; 32];
@@ -287,8 +252,7 @@ impl Protocol for NikonProtocol {
     }
 
     fn deadline(&self) -> Option<Instant> {
-        let r = self.requests.borrow();
-        if r.focus.is_some() || r.pinged {
+        if self.requests.is_pending() {
             return self.last_now;
         }
         self.poll_due()

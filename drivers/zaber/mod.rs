@@ -55,21 +55,16 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use std::cell::RefCell;
-use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use self::config::BAUD;
 use self::reply::{command, Command, Framer, Reply, MOVE_ABSOLUTE, POSITION};
 use self::reset::{Failure, Progress, ResetSequence, MAX_DEVICES};
-use crate::devices::analog_output::{AnalogOutputIds, AnalogOutputServer};
-use crate::devices::base::PING_MESSAGE;
+use crate::devices::analog_output::{AnalogOutputServer, OutputRequests};
 use crate::devices::text::TextSeverity;
-use crate::dispatch::SenderFilter;
 use crate::driver::{Cx, Driver, Protocol, Recovery, Reset, Retry, Supervision};
 use crate::serial::{PortKind, PortSettings};
 use crate::wire::class;
-use crate::wire::payload::analog_output as codec;
 use crate::{AnalogServer, Connection, Error};
 
 pub use self::config::Zaber;
@@ -86,19 +81,13 @@ pub const POLL_AFTER: Duration = Duration::from_secs(1);
 /// Pause before another attempt after a failed reset.
 pub const RETRY_DELAY: Duration = Duration::from_secs(1);
 
-/// Moves clients asked for, not yet written (one slot per channel: the last request wins),
-/// and whether a client pinged.
-struct Requests {
-    target: [Option<f64>; MAX_DEVICES],
-    any: bool,
-    pinged: bool,
-}
-
 /// The chain's protocol. See the module documentation.
 pub struct ZaberProtocol {
     analog: AnalogServer,
     output: AnalogOutputServer,
-    requests: Rc<RefCell<Requests>>,
+    /// Moves asked for, not yet written (one slot per channel: the last request wins), and
+    /// pings of the Analog.
+    requests: OutputRequests,
     reset: ResetSequence,
     framer: Framer,
     devices: usize,
@@ -115,43 +104,9 @@ impl ZaberProtocol {
         let mut analog = AnalogServer::new(&cfg.name, conn, 0)?;
         analog.set_class_of_service(class::RELIABLE);
         let output = AnalogOutputServer::new(&cfg.name, conn, 0)?;
-        let requests = Rc::new(RefCell::new(Requests {
-            target: [None; MAX_DEVICES],
-            any: false,
-            pinged: false,
-        }));
-        // The server half checks and stores requests; these see each one as it came.
-        let ids = AnalogOutputIds::register(conn)?;
-        let only = SenderFilter::Only(output.sender());
-        let r = requests.clone();
-        conn.register_handler(ids.change_request, only, move |m| {
-            if let Ok(req) = codec::ChangeRequest::decode(m.payload) {
-                let mut r = r.borrow_mut();
-                if let Some(slot) = usize::try_from(req.channel)
-                    .ok()
-                    .and_then(|c| r.target.get_mut(c))
-                {
-                    *slot = Some(req.value);
-                    r.any = true;
-                }
-            }
-        });
-        let r = requests.clone();
-        conn.register_handler(ids.change_channels_request, only, move |m| {
-            if let Ok(req) = codec::ChangeChannelsRequest::decode(m.payload) {
-                let mut r = r.borrow_mut();
-                let n = req.count.min(MAX_DEVICES);
-                for (slot, &v) in r.target[..n].iter_mut().zip(&req.values[..n]) {
-                    *slot = Some(v);
-                }
-                r.any = true;
-            }
-        });
-        let ping = conn.register_type(PING_MESSAGE)?;
-        let r = requests.clone();
-        conn.register_handler(ping, SenderFilter::Only(analog.sender()), move |_| {
-            r.borrow_mut().pinged = true;
-        });
+        // The server half checks and stores requests; this sees each one as it came (one
+        // slot per device a chain can have: the reset learns how many there are).
+        let requests = output.watch_requests(MAX_DEVICES, Some(analog.sender()))?;
         Ok(ZaberProtocol {
             analog,
             output,
@@ -258,17 +213,10 @@ impl ZaberProtocol {
 
     /// Writes the moves asked for, in channel order.
     fn send_requests(&mut self, cx: &mut Cx<'_>) {
-        let mut r = self.requests.borrow_mut();
-        if r.pinged {
-            r.pinged = false;
+        if self.requests.take_pinged() {
             let _ = self.analog.report(Some(cx.now.wall));
         }
-        if !r.any {
-            return;
-        }
-        r.any = false;
-        for (i, slot) in r.target.iter_mut().enumerate() {
-            let Some(v) = slot.take() else { continue };
+        while let Some((i, v)) = self.requests.take_next() {
             if i < self.devices {
                 // As C++: the value truncated to an integer (saturating).
                 cx.write(&command(i as u8 + 1, MOVE_ABSOLUTE, v as i32));
@@ -335,8 +283,7 @@ impl Protocol for ZaberProtocol {
     }
 
     fn deadline(&self) -> Option<Instant> {
-        let r = self.requests.borrow();
-        if r.any || r.pinged {
+        if self.requests.is_pending() {
             return self.last_now;
         }
         self.poll_due()

@@ -1,7 +1,7 @@
 """Type stubs of the vrpn module (the classes are implemented in Rust)."""
 
 from types import TracebackType
-from typing import Callable, List, Literal, Optional, Sequence, Tuple, Type, TypeVar, final
+from typing import Callable, Generic, List, Literal, Optional, Sequence, Tuple, Type, TypeVar, final
 
 __version__: str
 __all__ = [
@@ -99,20 +99,12 @@ class LimitError(VrpnError, ValueError):
     """A count outside what a VRPN device may have (sensors, buttons, channels, dials)."""
 
 _Self = TypeVar("_Self")
+_T = TypeVar("_T")
 
 # ----------------------------------------------------------------------------- reports
 
-@final
-class Pose:
-    """A tracker pose report."""
-    @property
-    def sensor(self) -> int: ...
-    @property
-    def pos(self) -> _Vec3:
-        """Position (x, y, z), metres, in the tracker's frame."""
-    @property
-    def quat(self) -> _Quat:
-        """Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's."""
+class _Stamped:
+    """The stamps a report carries (stub only: not a class of the module)."""
     @property
     def time(self) -> float:
         """Time the server stamped on the report, seconds since the epoch (translated to the
@@ -124,13 +116,28 @@ class Pose:
     def arrival(self) -> float:
         """Local wall clock (seconds since the epoch) of the mainloop() that read it:
         ``time.time() - arrival`` is the value's age."""
+
+class _Report(_Stamped):
+    """A report of one sensor, button, dial or analog device (stub only)."""
     @property
     def seq(self) -> int:
         """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
         the same ``seq`` twice means nothing new arrived."""
 
 @final
-class Velocity:
+class Pose(_Report):
+    """A tracker pose report."""
+    @property
+    def sensor(self) -> int: ...
+    @property
+    def pos(self) -> _Vec3:
+        """Position (x, y, z), metres, in the tracker's frame."""
+    @property
+    def quat(self) -> _Quat:
+        """Orientation quaternion (x, y, z, w): rotates the tracker's axes onto the sensor's."""
+
+@final
+class Velocity(_Report):
     """A tracker velocity report. Every vector is in the tracker's (room) frame."""
     @property
     def sensor(self) -> int: ...
@@ -148,24 +155,9 @@ class Velocity:
     def angular_velocity(self) -> _Vec3:
         """Angular velocity (x, y, z), rad/s, in the tracker's frame: the rotation vector
         (axis times angle) of ``vel_quat`` divided by ``vel_quat_dt``."""
-    @property
-    def time(self) -> float:
-        """Time the server stamped on the report, seconds since the epoch (translated to the
-        local clock when clock synchronisation is in effect)."""
-    @property
-    def sender_time(self) -> float:
-        """The stamp exactly as the server wrote it (its own clock)."""
-    @property
-    def arrival(self) -> float:
-        """Local wall clock (seconds since the epoch) of the mainloop() that read it:
-        ``time.time() - arrival`` is the value's age."""
-    @property
-    def seq(self) -> int:
-        """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
-        the same ``seq`` twice means nothing new arrived."""
 
 @final
-class Acceleration:
+class Acceleration(_Report):
     """A tracker acceleration report."""
     @property
     def sensor(self) -> int: ...
@@ -177,24 +169,9 @@ class Acceleration:
         """Change of the velocity rotation over ``acc_quat_dt`` seconds (tracker's frame)."""
     @property
     def acc_quat_dt(self) -> float: ...
-    @property
-    def time(self) -> float:
-        """Time the server stamped on the report, seconds since the epoch (translated to the
-        local clock when clock synchronisation is in effect)."""
-    @property
-    def sender_time(self) -> float:
-        """The stamp exactly as the server wrote it (its own clock)."""
-    @property
-    def arrival(self) -> float:
-        """Local wall clock (seconds since the epoch) of the mainloop() that read it:
-        ``time.time() - arrival`` is the value's age."""
-    @property
-    def seq(self) -> int:
-        """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
-        the same ``seq`` twice means nothing new arrived."""
 
 @final
-class ButtonChange:
+class ButtonChange(_Report):
     """One button was pressed or released."""
     @property
     def button(self) -> int: ...
@@ -203,82 +180,31 @@ class ButtonChange:
         """1 pressed, 0 released."""
     @property
     def pressed(self) -> bool: ...
-    @property
-    def time(self) -> float:
-        """Time the server stamped on the report, seconds since the epoch (translated to the
-        local clock when clock synchronisation is in effect)."""
-    @property
-    def sender_time(self) -> float:
-        """The stamp exactly as the server wrote it (its own clock)."""
-    @property
-    def arrival(self) -> float:
-        """Local wall clock (seconds since the epoch) of the mainloop() that read it:
-        ``time.time() - arrival`` is the value's age."""
-    @property
-    def seq(self) -> int:
-        """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
-        the same ``seq`` twice means nothing new arrived."""
 
 @final
-class ButtonStates:
+class ButtonStates(_Stamped):
     """The state of every button."""
     @property
     def states(self) -> List[int]: ...
     @property
     def num_buttons(self) -> int: ...
-    @property
-    def time(self) -> float: ...
-    @property
-    def sender_time(self) -> float: ...
-    @property
-    def arrival(self) -> float: ...
 
 @final
-class AnalogReport:
+class AnalogReport(_Report):
     """Every channel's value."""
     @property
     def channels(self) -> List[float]: ...
     @property
     def num_channels(self) -> int: ...
-    @property
-    def time(self) -> float:
-        """Time the server stamped on the report, seconds since the epoch (translated to the
-        local clock when clock synchronisation is in effect)."""
-    @property
-    def sender_time(self) -> float:
-        """The stamp exactly as the server wrote it (its own clock)."""
-    @property
-    def arrival(self) -> float:
-        """Local wall clock (seconds since the epoch) of the mainloop() that read it:
-        ``time.time() - arrival`` is the value's age."""
-    @property
-    def seq(self) -> int:
-        """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
-        the same ``seq`` twice means nothing new arrived."""
 
 @final
-class DialUpdate:
+class DialUpdate(_Report):
     """A dial turned."""
     @property
     def dial(self) -> int: ...
     @property
     def change(self) -> float:
         """Revolutions since the previous report."""
-    @property
-    def time(self) -> float:
-        """Time the server stamped on the report, seconds since the epoch (translated to the
-        local clock when clock synchronisation is in effect)."""
-    @property
-    def sender_time(self) -> float:
-        """The stamp exactly as the server wrote it (its own clock)."""
-    @property
-    def arrival(self) -> float:
-        """Local wall clock (seconds since the epoch) of the mainloop() that read it:
-        ``time.time() - arrival`` is the value's age."""
-    @property
-    def seq(self) -> int:
-        """1 for the first report of its sensor/button/dial this remote received, then 2, ...:
-        the same ``seq`` twice means nothing new arrived."""
 
 @final
 class TextMessage:
@@ -328,36 +254,18 @@ class Replay:
     @property
     def start_time(self) -> Optional[float]: ...
 
-class Remote:
-    """Base class of the remotes: the connection, its state and events, ``mainloop()``."""
+class _Polled:
+    """An object with its own connection, polled by its ``mainloop()``; ``with`` closes it
+    (stub only: not a class of the module)."""
     def mainloop(self) -> None:
         """Reads what arrived and runs the callbacks; raises a callback's exception."""
     def wait(self, timeout: float) -> bool:
         """Sleeps (GIL released) until data arrives, work is due or ``timeout`` s pass."""
     def fileno(self) -> int:
         """The descriptor for asyncio's ``add_reader`` or ``select``: readable when data
-        arrives or timed work is due. Raises ValueError for a replay."""
-    @property
-    def device(self) -> str: ...
-    @property
-    def connected(self) -> bool: ...
-    @property
-    def state(self) -> _ConnectionStateName: ...
-    @property
-    def closed(self) -> bool: ...
-    @property
-    def replay(self) -> Optional[Replay]: ...
-    def on_event(self, event: _EventName, f: Callable[[], object]) -> int: ...
-    def on_state_change(self, f: Callable[[_ConnectionStateName], object]) -> int: ...
-    def on_notice(self, f: Callable[[Notice], object]) -> int: ...
-    def on_peer_sender(self, f: Callable[[str], object]) -> int:
-        """Calls ``f(name)`` with each device name the server describes, as it does."""
-    @property
-    def peer_senders(self) -> List[str]:
-        """The device names the server has described so far."""
+        arrives or timed work is due."""
     def remove_callback(self, handle: int) -> None: ...
-    def close(self) -> None:
-        """Releases the remote now (its connection closes once no other remote uses it)."""
+    def close(self) -> None: ...
     def __enter__(self: _Self) -> _Self: ...
     def __exit__(
         self,
@@ -365,6 +273,35 @@ class Remote:
         value: Optional[BaseException],
         traceback: Optional[TracebackType],
     ) -> bool: ...
+
+class _Connected(_Polled):
+    """A remote's or a server's connection: its state and events (stub only)."""
+    @property
+    def connected(self) -> bool: ...
+    @property
+    def state(self) -> _ConnectionStateName: ...
+    @property
+    def closed(self) -> bool: ...
+    def on_event(self, event: _EventName, f: Callable[[], object]) -> int: ...
+    def on_state_change(self, f: Callable[[_ConnectionStateName], object]) -> int: ...
+    def on_notice(self, f: Callable[[Notice], object]) -> int: ...
+    @property
+    def peer_senders(self) -> List[str]:
+        """The device names the other side has described so far."""
+
+class Remote(_Connected):
+    """Base class of the remotes: the connection, its state and events, ``mainloop()``."""
+    def fileno(self) -> int:
+        """The descriptor for asyncio's ``add_reader`` or ``select``: readable when data
+        arrives or timed work is due. Raises ValueError for a replay."""
+    @property
+    def device(self) -> str: ...
+    @property
+    def replay(self) -> Optional[Replay]: ...
+    def on_peer_sender(self, f: Callable[[str], object]) -> int:
+        """Calls ``f(name)`` with each device name the server describes, as it does."""
+    def close(self) -> None:
+        """Releases the remote now (its connection closes once no other remote uses it)."""
 
 @final
 class TrackerRemote(Remote):
@@ -436,39 +373,17 @@ class TextReceiver(Remote):
 # ----------------------------------------------------------------------------- servers
 
 @final
-class Server:
+class Server(_Connected):
     """A server connection: UDP and TCP on one port, for any number of clients."""
     def __new__(cls, port: int = 3883, nic: Optional[str] = None) -> Server: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
     @property
     def port(self) -> Optional[int]: ...
     @property
-    def connected(self) -> bool: ...
-    @property
     def connected_peers(self) -> int: ...
-    @property
-    def state(self) -> _ConnectionStateName: ...
-    @property
-    def closed(self) -> bool: ...
-    def on_event(self, event: _EventName, f: Callable[[], object]) -> int: ...
-    def on_state_change(self, f: Callable[[_ConnectionStateName], object]) -> int: ...
-    def on_notice(self, f: Callable[[Notice], object]) -> int: ...
     def on_peer_sender(self, f: Callable[[str], object]) -> int:
         """Calls ``f(name)`` with each sender name a client describes."""
-    @property
-    def peer_senders(self) -> List[str]: ...
-    def remove_callback(self, handle: int) -> None: ...
     def close(self) -> None:
         """Releases the port and closes every device server made on this server, now."""
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self,
-        ty: Optional[Type[BaseException]],
-        value: Optional[BaseException],
-        traceback: Optional[TracebackType],
-    ) -> bool: ...
 
 @final
 class TrackerServer:
@@ -882,17 +797,11 @@ class ImagerRemote(Remote):
 
 _MutexStateName = Literal["available", "requesting", "ours", "held_remotely"]
 
-@final
-class MutexRemote:
-    """A client of a server's mutex: ``MutexRemote("lock@host")``."""
-    def __new__(cls, name: str) -> MutexRemote: ...
+class _Mutex(_Polled):
+    """A mutex participant: a client of a server's mutex or a peer (stub only)."""
     def request(self) -> None:
         """Asks for the lock (denied at once when it is not available)."""
     def release(self) -> None: ...
-    @property
-    def index(self) -> Optional[int]: ...
-    def set_request_timeout(self, timeout: Optional[float]) -> None:
-        """After ``timeout`` s without an answer a request counts as denied."""
     @property
     def state(self) -> _MutexStateName: ...
     @property
@@ -901,55 +810,32 @@ class MutexRemote:
     def is_held_locally(self) -> bool: ...
     @property
     def is_held_remotely(self) -> bool: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
     def on_granted(self, f: Callable[[], object]) -> int: ...
     def on_denied(self, f: Callable[[], object]) -> int: ...
     def on_taken(self, f: Callable[[], object]) -> int: ...
     def on_released(self, f: Callable[[], object]) -> int: ...
-    def remove_callback(self, handle: int) -> None: ...
-    def close(self) -> None: ...
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
-    ) -> bool: ...
 
 @final
-class PeerMutex:
+class MutexRemote(_Mutex):
+    """A client of a server's mutex: ``MutexRemote("lock@host")``."""
+    def __new__(cls, name: str) -> MutexRemote: ...
+    @property
+    def index(self) -> Optional[int]: ...
+    def set_request_timeout(self, timeout: Optional[float]) -> None:
+        """After ``timeout`` s without an answer a request counts as denied."""
+
+@final
+class PeerMutex(_Mutex):
     """A peer of a serverless mutex: ``PeerMutex("lock", port=0, nic=None)``."""
     def __new__(cls, name: str, port: int = 0, nic: Optional[str] = None) -> PeerMutex: ...
     def add_peer(self, station: str) -> None:
         """Adds the peer serving at "host:port"."""
-    def request(self) -> None: ...
-    def release(self) -> None: ...
     @property
     def port(self) -> int: ...
     @property
     def num_peers(self) -> int: ...
     @property
     def peers_connected(self) -> bool: ...
-    @property
-    def state(self) -> _MutexStateName: ...
-    @property
-    def is_available(self) -> bool: ...
-    @property
-    def is_held_locally(self) -> bool: ...
-    @property
-    def is_held_remotely(self) -> bool: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
-    def on_granted(self, f: Callable[[], object]) -> int: ...
-    def on_denied(self, f: Callable[[], object]) -> int: ...
-    def on_taken(self, f: Callable[[], object]) -> int: ...
-    def on_released(self, f: Callable[[], object]) -> int: ...
-    def remove_callback(self, handle: int) -> None: ...
-    def close(self) -> None: ...
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
-    ) -> bool: ...
 
 @final
 class MutexServer:
@@ -975,8 +861,23 @@ class SharedChange:
     @property
     def is_local(self) -> bool: ...
 
+class _Shared(_Polled, Generic[_T]):
+    """A shared value of type ``_T`` (stub only: SharedInt32, SharedFloat64, SharedString)."""
+    @property
+    def value(self) -> _T: ...
+    @property
+    def last_update(self) -> float: ...
+    def set(self, value: _T, when: Optional[float] = None) -> None: ...
+    @property
+    def is_serializer(self) -> bool: ...
+    def become_serializer(self) -> None: ...
+    def set_policy(self, name: _PolicyName) -> None: ...
+    def set_policy_callback(self, f: Callable[[_T, float], object]) -> int: ...
+    def on_change(self, f: Callable[[SharedChange], object]) -> int: ...
+    def on_deferred_update(self, f: Callable[[], object]) -> int: ...
+
 @final
-class SharedInt32:
+class SharedInt32(_Shared[int]):
     """A shared int32: ``SharedInt32("name@host", value)`` on a client,
     ``SharedInt32.server(server, "name", value)`` on a server."""
     def __new__(
@@ -988,30 +889,9 @@ class SharedInt32:
         server: Server, name: str, value: int = 0, serialized: bool = False,
         ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedInt32: ...
-    @property
-    def value(self) -> int: ...
-    @property
-    def last_update(self) -> float: ...
-    def set(self, value: int, when: Optional[float] = None) -> None: ...
-    @property
-    def is_serializer(self) -> bool: ...
-    def become_serializer(self) -> None: ...
-    def set_policy(self, name: _PolicyName) -> None: ...
-    def set_policy_callback(self, f: Callable[[int, float], object]) -> int: ...
-    def on_change(self, f: Callable[[SharedChange], object]) -> int: ...
-    def on_deferred_update(self, f: Callable[[], object]) -> int: ...
-    def remove_callback(self, handle: int) -> None: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
-    def close(self) -> None: ...
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
-    ) -> bool: ...
 
 @final
-class SharedFloat64:
+class SharedFloat64(_Shared[float]):
     """A shared float64 (see SharedInt32)."""
     def __new__(
         cls, name: str, value: float = 0.0, serialized: bool = False,
@@ -1022,30 +902,9 @@ class SharedFloat64:
         server: Server, name: str, value: float = 0.0, serialized: bool = False,
         ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedFloat64: ...
-    @property
-    def value(self) -> float: ...
-    @property
-    def last_update(self) -> float: ...
-    def set(self, value: float, when: Optional[float] = None) -> None: ...
-    @property
-    def is_serializer(self) -> bool: ...
-    def become_serializer(self) -> None: ...
-    def set_policy(self, name: _PolicyName) -> None: ...
-    def set_policy_callback(self, f: Callable[[float, float], object]) -> int: ...
-    def on_change(self, f: Callable[[SharedChange], object]) -> int: ...
-    def on_deferred_update(self, f: Callable[[], object]) -> int: ...
-    def remove_callback(self, handle: int) -> None: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
-    def close(self) -> None: ...
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
-    ) -> bool: ...
 
 @final
-class SharedString:
+class SharedString(_Shared[str]):
     """A shared string (see SharedInt32)."""
     def __new__(
         cls, name: str, value: str = "", serialized: bool = False,
@@ -1056,24 +915,3 @@ class SharedString:
         server: Server, name: str, value: str = "", serialized: bool = False,
         ignore_old: bool = False, ignore_idempotent: bool = False,
     ) -> SharedString: ...
-    @property
-    def value(self) -> str: ...
-    @property
-    def last_update(self) -> float: ...
-    def set(self, value: str, when: Optional[float] = None) -> None: ...
-    @property
-    def is_serializer(self) -> bool: ...
-    def become_serializer(self) -> None: ...
-    def set_policy(self, name: _PolicyName) -> None: ...
-    def set_policy_callback(self, f: Callable[[str, float], object]) -> int: ...
-    def on_change(self, f: Callable[[SharedChange], object]) -> int: ...
-    def on_deferred_update(self, f: Callable[[], object]) -> int: ...
-    def remove_callback(self, handle: int) -> None: ...
-    def mainloop(self) -> None: ...
-    def wait(self, timeout: float) -> bool: ...
-    def fileno(self) -> int: ...
-    def close(self) -> None: ...
-    def __enter__(self: _Self) -> _Self: ...
-    def __exit__(
-        self, ty: Optional[Type[BaseException]], value: Optional[BaseException], traceback: Optional[TracebackType]
-    ) -> bool: ...

@@ -1,7 +1,8 @@
 //! Analog output: clients ask the server to set output channels; the server
 //! announces its channel count on every new connection. [`AnalogOutputRemote`] is the client
 //! half, [`AnalogOutputServer`] the server half (with the callbacks of C++
-//! `vrpn_Analog_Output_Callback_Server`).
+//! `vrpn_Analog_Output_Callback_Server`). [`OutputRequests`] keeps what clients asked for
+//! until a driver writes it to its device.
 
 use std::cell::{Cell, RefCell};
 use std::ops::Deref;
@@ -10,7 +11,7 @@ use std::rc::Rc;
 use super::base::{self, BaseIds, RemoteCore};
 use super::text::TextSeverity;
 use crate::connection::{Connection, ConnectionEvent};
-use crate::dispatch::{CallbackList, HandlerId, SenderFilter, TypeId};
+use crate::dispatch::{CallbackList, HandlerId, SenderFilter, SenderId, TypeId};
 use crate::error::Error;
 use crate::time::TimeVal;
 use crate::wire::class;
@@ -150,8 +151,48 @@ pub struct AnalogOutputServer {
 
 impl AnalogOutputServer {
     /// This device's sender id on its connection.
-    pub fn sender(&self) -> crate::dispatch::SenderId {
+    pub fn sender(&self) -> SenderId {
         self.base.sender
+    }
+
+    /// Keeps the values clients ask for, channels `0..slots`, for a driver to take when it
+    /// next writes to its device (see [`OutputRequests`]); with `pings_of`, also notes that a
+    /// client pinged that sender (a driver answers a ping of its Analog with a report).
+    pub fn watch_requests(
+        &self,
+        slots: usize,
+        pings_of: Option<SenderId>,
+    ) -> Result<OutputRequests, Error> {
+        let pending = Rc::new(RefCell::new(Pending::new(slots)));
+        let only = SenderFilter::Only(self.base.sender);
+        let p = pending.clone();
+        self.conn
+            .register_handler(self.ids.change_request, only, move |m| {
+                if let Ok(r) = codec::ChangeRequest::decode(m.payload) {
+                    if let Ok(c) = usize::try_from(r.channel) {
+                        p.borrow_mut().store(c, r.value);
+                    }
+                }
+            });
+        let p = pending.clone();
+        self.conn
+            .register_handler(self.ids.change_channels_request, only, move |m| {
+                if let Ok(r) = codec::ChangeChannelsRequest::decode(m.payload) {
+                    let mut p = p.borrow_mut();
+                    for (c, &v) in r.values[..r.count].iter().enumerate() {
+                        p.store(c, v);
+                    }
+                }
+            });
+        if let Some(sender) = pings_of {
+            let ping = self.conn.register_type(base::PING_MESSAGE)?;
+            let p = pending.clone();
+            self.conn
+                .register_handler(ping, SenderFilter::Only(sender), move |_| {
+                    p.borrow_mut().pinged = true;
+                });
+        }
+        Ok(OutputRequests { pending })
     }
 
     /// Registers `device` with `channels` output channels (clamped to 128).
@@ -289,5 +330,117 @@ impl AnalogOutputServer {
             &buf,
             class::RELIABLE,
         )
+    }
+}
+
+/// What clients asked an [`AnalogOutputServer`] for that its driver has not written yet: the
+/// last value asked for each channel (a device is moved or set to where it was last asked to
+/// be; a value superseded before the driver's next pass is never written), and whether a
+/// client pinged. Made by [`AnalogOutputServer::watch_requests`]; its slots are allocated
+/// then, so keeping and taking requests allocates nothing.
+///
+/// It sees requests as they came: a value for a channel the server half refuses (beyond its
+/// current channel count) is still kept when a slot holds it, for a driver that learns its
+/// channel count later (a chain of positioners found by a reset).
+pub struct OutputRequests {
+    pending: Rc<RefCell<Pending>>,
+}
+
+impl OutputRequests {
+    /// Whether a value or a ping waits (the driver should run its next pass at once).
+    pub fn is_pending(&self) -> bool {
+        let p = self.pending.borrow();
+        p.lowest.is_some() || p.pinged
+    }
+
+    /// Whether a client pinged since the last call.
+    pub fn take_pinged(&self) -> bool {
+        std::mem::take(&mut self.pending.borrow_mut().pinged)
+    }
+
+    /// The waiting value of the lowest channel that has one, taken: calling it until `None`
+    /// yields the requests in channel order.
+    pub fn take_next(&self) -> Option<(usize, f64)> {
+        self.pending.borrow_mut().take_next()
+    }
+}
+
+/// The slots behind [`OutputRequests`].
+struct Pending {
+    value: Vec<Option<f64>>,
+    /// No slot below it holds a value (`None`: no slot does).
+    lowest: Option<usize>,
+    pinged: bool,
+}
+
+impl Pending {
+    fn new(slots: usize) -> Pending {
+        Pending {
+            value: vec![None; slots],
+            lowest: None,
+            pinged: false,
+        }
+    }
+
+    /// Keeps `v` for channel `c` (ignored without a slot for it).
+    fn store(&mut self, c: usize, v: f64) {
+        if let Some(slot) = self.value.get_mut(c) {
+            *slot = Some(v);
+            self.lowest = Some(self.lowest.map_or(c, |l| l.min(c)));
+        }
+    }
+
+    fn take_next(&mut self) -> Option<(usize, f64)> {
+        let from = self.lowest?;
+        for c in from..self.value.len() {
+            if let Some(v) = self.value[c].take() {
+                self.lowest = Some(c + 1).filter(|&n| n < self.value.len());
+                return Some((c, v));
+            }
+        }
+        self.lowest = None;
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Pending;
+
+    fn drain(p: &mut Pending) -> Vec<(usize, f64)> {
+        std::iter::from_fn(|| p.take_next()).collect()
+    }
+
+    #[test]
+    fn the_last_value_per_channel_is_taken_in_channel_order() {
+        let mut p = Pending::new(4);
+        p.store(2, 1.0);
+        p.store(0, 2.0);
+        p.store(2, 3.0);
+        p.store(3, 4.0);
+        assert_eq!(drain(&mut p), [(0, 2.0), (2, 3.0), (3, 4.0)]);
+        assert!(p.lowest.is_none());
+        assert_eq!(drain(&mut p), []);
+    }
+
+    #[test]
+    fn a_channel_without_a_slot_is_ignored() {
+        let mut p = Pending::new(1);
+        p.store(1, 5.0);
+        p.store(usize::MAX, 5.0);
+        assert!(p.lowest.is_none());
+        assert_eq!(drain(&mut p), []);
+        p.store(0, 6.0);
+        assert_eq!(drain(&mut p), [(0, 6.0)]);
+    }
+
+    #[test]
+    fn a_value_stored_between_takes_below_the_cursor_is_found() {
+        let mut p = Pending::new(3);
+        p.store(1, 1.0);
+        p.store(2, 2.0);
+        assert_eq!(p.take_next(), Some((1, 1.0)));
+        p.store(0, 3.0);
+        assert_eq!(drain(&mut p), [(0, 3.0), (2, 2.0)]);
     }
 }

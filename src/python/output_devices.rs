@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 
 use super::callbacks::{run, Owner};
 use super::owned::Owned;
-use super::remote::{Remote, RemoteLike};
+use super::remote::{remote_like, Remote, RemoteLike};
 use super::server::{close_held, count_arg, held, Held, Server};
 use super::{time_or_now, to_py};
 use crate::devices::analog_output::{AnalogOutputRemote as AoRemote, AnalogOutputValues};
@@ -27,14 +27,7 @@ use crate::dispatch::HandlerId;
 use crate::server::limits::{Claim, Interface};
 use crate::time::TimeVal;
 
-impl RemoteLike for AoRemote {
-    fn core(&self) -> &RemoteCore {
-        self
-    }
-    fn remove(&self, id: HandlerId) -> bool {
-        self.remove_callback(id)
-    }
-}
+remote_like!(AoRemote, FdRemote);
 
 impl RemoteLike for PsRemote {
     fn core(&self) -> &RemoteCore {
@@ -45,17 +38,18 @@ impl RemoteLike for PsRemote {
     }
 }
 
-impl RemoteLike for FdRemote {
-    fn core(&self) -> &RemoteCore {
-        self
-    }
-    fn remove(&self, id: HandlerId) -> bool {
-        self.remove_callback(id)
-    }
-}
-
 fn secs(t: TimeVal) -> f64 {
     t.as_secs_f64()
+}
+
+/// A position or a force as Python's (x, y, z).
+fn xyz<T: Copy>(v: [T; 3]) -> (T, T, T) {
+    (v[0], v[1], v[2])
+}
+
+/// A quaternion (x, y, z, w) or a plane (a, b, c, d) as a Python tuple.
+fn xyzw<T: Copy>(v: [T; 4]) -> (T, T, T, T) {
+    (v[0], v[1], v[2], v[3])
 }
 
 // ------------------------------------------------------------------ report objects
@@ -95,14 +89,12 @@ impl PoserRequest {
     /// Position (x, y, z), after the server clamped it to its workspace.
     #[getter]
     fn pos(&self) -> (f64, f64, f64) {
-        let p = self.0.pos;
-        (p[0], p[1], p[2])
+        xyz(self.0.pos)
     }
     /// Orientation (x, y, z, w).
     #[getter]
     fn quat(&self) -> (f64, f64, f64, f64) {
-        let q = self.0.quat;
-        (q[0], q[1], q[2], q[3])
+        xyzw(self.0.quat)
     }
     fn __repr__(&self) -> String {
         format!("PoserRequest(pos={:?}, quat={:?})", self.0.pos, self.0.quat)
@@ -123,8 +115,7 @@ impl PyForceReport {
     /// Force (x, y, z).
     #[getter]
     fn force(&self) -> (f64, f64, f64) {
-        let f = self.0.force;
-        (f[0], f[1], f[2])
+        xyz(self.0.force)
     }
     fn __repr__(&self) -> String {
         format!("ForceReport(force={:?})", self.0.force)
@@ -145,14 +136,12 @@ impl PyScpReport {
     /// Contact point (x, y, z).
     #[getter]
     fn pos(&self) -> (f64, f64, f64) {
-        let p = self.0.pos;
-        (p[0], p[1], p[2])
+        xyz(self.0.pos)
     }
     /// Orientation (x, y, z, w).
     #[getter]
     fn quat(&self) -> (f64, f64, f64, f64) {
-        let q = self.0.quat;
-        (q[0], q[1], q[2], q[3])
+        xyzw(self.0.quat)
     }
     fn __repr__(&self) -> String {
         format!("ScpReport(pos={:?})", self.0.pos)
@@ -194,14 +183,12 @@ impl ForceFieldRequest {
     /// Field origin (x, y, z).
     #[getter]
     fn origin(&self) -> (f32, f32, f32) {
-        let o = self.1.origin;
-        (o[0], o[1], o[2])
+        xyz(self.1.origin)
     }
     /// Force at the origin.
     #[getter]
     fn force(&self) -> (f32, f32, f32) {
-        let f = self.1.force;
-        (f[0], f[1], f[2])
+        xyz(self.1.force)
     }
     /// Jacobian, three rows of three.
     #[getter]
@@ -234,8 +221,7 @@ impl PlaneRequest {
     /// Plane equation (a, b, c, d): a·x + b·y + c·z + d = 0.
     #[getter]
     fn plane(&self) -> (f32, f32, f32, f32) {
-        let p = self.1.plane;
-        (p[0], p[1], p[2], p[3])
+        xyzw(self.1.plane)
     }
     /// Spring constant.
     #[getter]
@@ -491,11 +477,57 @@ impl ForceDeviceRemote {
 
 // ------------------------------------------------------------------ servers
 
-struct AoDev {
+/// A device server on a `Server`: the Rust server, the callbacks Python registered on it, and
+/// what keeps its name.
+struct Dev<S> {
     callbacks: Callbacks,
-    server: crate::devices::analog_output::AnalogOutputServer,
+    server: S,
     _name: Claim,
 }
+
+impl<S> Dev<S> {
+    fn new(server: S, name: Claim) -> Dev<S> {
+        Dev {
+            callbacks: Callbacks::default(),
+            server,
+            _name: name,
+        }
+    }
+}
+
+/// The `#[pymethods]` of device server class `$class` (a `held` field holding a `$dev`):
+/// `$methods`, and `remove_callback` and `close`, which every one has; and `dev()`, its
+/// device or `ClosedError`.
+macro_rules! device_server {
+    ($class:ident, $dev:ty, $($methods:tt)*) => {
+        impl $class {
+            /// Its device, or `ClosedError` after `close()`.
+            fn dev(&self) -> PyResult<Rc<$dev>> {
+                held(&self.held, stringify!($class))
+            }
+        }
+
+        #[pymethods]
+        impl $class {
+            $($methods)*
+
+            /// Removes a callback an `on_*` method returned.
+            fn remove_callback(&self, id: u64) -> PyResult<bool> {
+                let d = self.dev()?;
+                Ok(d.server.remove_callback(d.callbacks.take(id)?))
+            }
+
+            /// Stops serving this device (its name is free again on the server).
+            fn close(&self) -> PyResult<()> {
+                close_held(&self.held, stringify!($class))
+            }
+        }
+    };
+}
+
+type AoDev = Dev<crate::devices::analog_output::AnalogOutputServer>;
+type PoserDev = Dev<crate::devices::poser::PoserServer>;
+type ForceDev = Dev<crate::devices::force::ForceDeviceServer>;
 
 /// An analog output device on a `Server`: `AnalogOutputServer(server, "Out0", channels=1)`.
 /// Clients' requests set its values; `on_request` hears each one.
@@ -504,8 +536,7 @@ pub(crate) struct AnalogOutputServer {
     held: Owned<Rc<Held<AoDev>>>,
 }
 
-#[pymethods]
-impl AnalogOutputServer {
+device_server! { AnalogOutputServer, AoDev,
     #[new]
     #[pyo3(
         signature = (server, name, channels = None),
@@ -518,11 +549,8 @@ impl AnalogOutputServer {
     ) -> PyResult<Self> {
         let n = count_arg(channels, Interface::AnalogOutput)?;
         let held = server.publish(Interface::AnalogOutput, name, n, |conn, n, claim| {
-            Ok(AoDev {
-                callbacks: Callbacks::default(),
-                server: crate::devices::analog_output::AnalogOutputServer::new(name, conn, n)?,
-                _name: claim,
-            })
+            let server = crate::devices::analog_output::AnalogOutputServer::new(name, conn, n)?;
+            Ok(Dev::new(server, claim))
         })?;
         Ok(AnalogOutputServer { held })
     }
@@ -530,41 +558,24 @@ impl AnalogOutputServer {
     /// Calls `f(request)` after each client request has set the values (inside
     /// `Server.mainloop()`). Returns an id for `remove_callback`.
     fn on_request(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "AnalogOutputServer")?;
+        let d = self.dev()?;
         let id = d
             .server
             .on_request(move |v| call_in_python(&f, AnalogOutputRequest(*v)));
         Ok(d.callbacks.keep(id))
     }
 
-    /// Removes a callback `on_request` returned.
-    fn remove_callback(&self, id: u64) -> PyResult<bool> {
-        let d = held(&self.held, "AnalogOutputServer")?;
-        Ok(d.server.remove_callback(d.callbacks.take(id)?))
-    }
-
     /// The current values of the channels.
     fn values(&self) -> PyResult<Vec<f64>> {
-        let d = held(&self.held, "AnalogOutputServer")?;
+        let d = self.dev()?;
         Ok(d.server.values().channels().to_vec())
     }
 
     /// Announces the channel count to every client.
     fn report_num_channels(&self) -> PyResult<()> {
-        let d = held(&self.held, "AnalogOutputServer")?;
+        let d = self.dev()?;
         run(|| d.server.report_num_channels())
     }
-
-    /// Stops serving this device (its name is free again on the server).
-    fn close(&self) -> PyResult<()> {
-        close_held(&self.held, "AnalogOutputServer")
-    }
-}
-
-struct PoserDev {
-    callbacks: Callbacks,
-    server: crate::devices::poser::PoserServer,
-    _name: Claim,
 }
 
 /// A poser on a `Server`: `PoserServer(server, "Poser0")`. Clients' pose requests reach
@@ -585,23 +596,19 @@ fn call_in_python<T: pyo3::PyClass + Into<pyo3::PyClassInitializer<T>>>(f: &Py<P
     });
 }
 
-#[pymethods]
-impl PoserServer {
+device_server! { PoserServer, PoserDev,
     #[new]
     fn new(server: PyRef<'_, Server>, name: &str) -> PyResult<Self> {
         let held = server.publish(Interface::Poser, name, 0, |conn, _, claim| {
-            Ok(PoserDev {
-                callbacks: Callbacks::default(),
-                server: crate::devices::poser::PoserServer::new(name, conn)?,
-                _name: claim,
-            })
+            let server = crate::devices::poser::PoserServer::new(name, conn)?;
+            Ok(Dev::new(server, claim))
         })?;
         Ok(PoserServer { held })
     }
 
     /// Calls `f(request)` for each absolute pose a client asks for. Returns an id.
     fn on_pose(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "PoserServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(
             d.server
                 .on_pose(move |p| call_in_python(&f, PoserRequest(*p))),
@@ -610,22 +617,16 @@ impl PoserServer {
 
     /// Calls `f(request)` for each relative pose (the resulting pose). Returns an id.
     fn on_relative_pose(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "PoserServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(
             d.server
                 .on_relative_pose(move |p| call_in_python(&f, PoserRequest(*p))),
         ))
     }
 
-    /// Removes a callback.
-    fn remove_callback(&self, id: u64) -> PyResult<bool> {
-        let d = held(&self.held, "PoserServer")?;
-        Ok(d.server.remove_callback(d.callbacks.take(id)?))
-    }
-
     /// The pose last requested (as a `PoserRequest`).
     fn pose(&self) -> PyResult<PoserRequest> {
-        let d = held(&self.held, "PoserServer")?;
+        let d = self.dev()?;
         let s = d.server.state();
         Ok(PoserRequest(PoserPose {
             time: s.time,
@@ -633,17 +634,6 @@ impl PoserServer {
             quat: s.quat,
         }))
     }
-
-    /// Stops serving this device.
-    fn close(&self) -> PyResult<()> {
-        close_held(&self.held, "PoserServer")
-    }
-}
-
-struct ForceDev {
-    callbacks: Callbacks,
-    server: crate::devices::force::ForceDeviceServer,
-    _name: Claim,
 }
 
 /// A force device on a `Server`: `ForceDeviceServer(server, "Phantom0")`. Reports forces
@@ -653,16 +643,12 @@ pub(crate) struct ForceDeviceServer {
     held: Owned<Rc<Held<ForceDev>>>,
 }
 
-#[pymethods]
-impl ForceDeviceServer {
+device_server! { ForceDeviceServer, ForceDev,
     #[new]
     fn new(server: PyRef<'_, Server>, name: &str) -> PyResult<Self> {
         let held = server.publish(Interface::ForceDevice, name, 0, |conn, _, claim| {
-            Ok(ForceDev {
-                callbacks: Callbacks::default(),
-                server: crate::devices::force::ForceDeviceServer::new(name, conn)?,
-                _name: claim,
-            })
+            let server = crate::devices::force::ForceDeviceServer::new(name, conn)?;
+            Ok(Dev::new(server, claim))
         })?;
         Ok(ForceDeviceServer { held })
     }
@@ -670,28 +656,28 @@ impl ForceDeviceServer {
     /// Reports a force (x, y, z), stamped `time` (default now).
     #[pyo3(signature = (force, time = None))]
     fn report_force(&self, force: [f64; 3], time: Option<f64>) -> PyResult<()> {
-        let d = held(&self.held, "ForceDeviceServer")?;
-        let t = time.map_or_else(|| d.server_now(), TimeVal::from_secs_f64);
+        let d = self.dev()?;
+        let t = time.map_or_else(TimeVal::now, TimeVal::from_secs_f64);
         run(|| d.server.report_force(t, force))
     }
 
     /// Reports a surface contact point and orientation (x, y, z, w).
     #[pyo3(signature = (pos, quat = [0.0, 0.0, 0.0, 1.0], time = None))]
     fn report_scp(&self, pos: [f64; 3], quat: [f64; 4], time: Option<f64>) -> PyResult<()> {
-        let d = held(&self.held, "ForceDeviceServer")?;
-        let t = time.map_or_else(|| d.server_now(), TimeVal::from_secs_f64);
+        let d = self.dev()?;
+        let t = time.map_or_else(TimeVal::now, TimeVal::from_secs_f64);
         run(|| d.server.report_scp(t, pos, quat))
     }
 
     /// Reports an error code (C++ `FD_*`).
     fn send_error(&self, code: i32) -> PyResult<()> {
-        let d = held(&self.held, "ForceDeviceServer")?;
+        let d = self.dev()?;
         run(|| d.server.send_error(code))
     }
 
     /// Calls `f(field)` for every force field a client sends. Returns an id.
     fn on_force_field(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "ForceDeviceServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(
             d.server
                 .on_force_field(move |(t, x)| call_in_python(&f, ForceFieldRequest(*t, *x))),
@@ -700,7 +686,7 @@ impl ForceDeviceServer {
 
     /// Calls `f(plane)` for every surface plane a client sends. Returns an id.
     fn on_plane(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "ForceDeviceServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(
             d.server
                 .on_plane(move |(t, p)| call_in_python(&f, PlaneRequest(*t, *p))),
@@ -709,7 +695,7 @@ impl ForceDeviceServer {
 
     /// Calls `f(effect)` for every custom effect (and stop) a client sends. Returns an id.
     fn on_custom_effect(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "ForceDeviceServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(d.server.on_custom_effect(move |m| {
             call_in_python(
                 &f,
@@ -725,7 +711,7 @@ impl ForceDeviceServer {
     /// Calls `f(name, time)` for every trimesh, scene or constraint request, with the
     /// request's VRPN type name. Returns an id.
     fn on_request(&self, f: Py<PyAny>) -> PyResult<u64> {
-        let d = held(&self.held, "ForceDeviceServer")?;
+        let d = self.dev()?;
         Ok(d.callbacks.keep(d.server.on_request(move |r| {
             let (name, t) = (r.request.type_name(), r.time.as_secs_f64());
             Python::attach(|py| {
@@ -734,23 +720,6 @@ impl ForceDeviceServer {
                 }
             });
         })))
-    }
-
-    /// Removes a callback.
-    fn remove_callback(&self, id: u64) -> PyResult<bool> {
-        let d = held(&self.held, "ForceDeviceServer")?;
-        Ok(d.server.remove_callback(d.callbacks.take(id)?))
-    }
-
-    /// Stops serving this device.
-    fn close(&self) -> PyResult<()> {
-        close_held(&self.held, "ForceDeviceServer")
-    }
-}
-
-impl ForceDev {
-    fn server_now(&self) -> TimeVal {
-        TimeVal::now()
     }
 }
 

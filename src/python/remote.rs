@@ -112,18 +112,21 @@ pub(crate) trait RemoteLike {
     fn remove(&self, id: HandlerId) -> bool;
 }
 
+/// `RemoteLike` for Rust remotes that deref to their `RemoteCore` and have
+/// `remove_callback`.
 macro_rules! remote_like {
     ($($t:ty),*) => {$(
-        impl RemoteLike for $t {
-            fn core(&self) -> &RemoteCore {
+        impl $crate::python::remote::RemoteLike for $t {
+            fn core(&self) -> &$crate::devices::base::RemoteCore {
                 self
             }
-            fn remove(&self, id: HandlerId) -> bool {
+            fn remove(&self, id: $crate::dispatch::HandlerId) -> bool {
                 self.remove_callback(id)
             }
         }
     )*};
 }
+pub(crate) use remote_like;
 remote_like!(
     crate::TrackerRemote,
     crate::ButtonRemote,

@@ -23,12 +23,54 @@ fn fmt_time(t: f64) -> String {
     format!("{t:.6}")
 }
 
+/// The `#[pymethods]` of report class `$class`: `$methods`, and the stamps a report carries,
+/// read from the Rust report in field 0: `time`, `sender_time`, `arrival` and, for the reports
+/// of one sensor, button, dial or analog device (all but `no_seq` ones), `seq`.
+macro_rules! stamped_report {
+    ($class:ident, no_seq, $($methods:tt)*) => {
+        stamped_report!(@impl $class, {}, $($methods)*);
+    };
+    ($class:ident, $($methods:tt)*) => {
+        stamped_report!(@impl $class, {
+            /// Which report of its sensor, button or dial this is (1 for the first this remote
+            /// received): a frame loop that sees the same `seq` again saw nothing new.
+            #[getter]
+            fn seq(&self) -> u64 {
+                self.0.seq
+            }
+        }, $($methods)*);
+    };
+    (@impl $class:ident, { $($seq:tt)* }, $($methods:tt)*) => {
+        #[pymethods]
+        impl $class {
+            $($methods)*
+
+            /// Time the server stamped on the report, seconds since the epoch.
+            #[getter]
+            fn time(&self) -> f64 {
+                self.0.time.as_secs_f64()
+            }
+            /// The time exactly as the sender stamped it (its own clock, as logs keep it).
+            #[getter]
+            fn sender_time(&self) -> f64 {
+                self.0.sender_time.as_secs_f64()
+            }
+            /// When it arrived here: the local wall clock (seconds since the epoch) of the
+            /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
+            #[getter]
+            fn arrival(&self) -> f64 {
+                self.0.arrival.as_secs_f64()
+            }
+            $($seq)*
+        }
+    };
+}
+
 /// A tracker pose report.
 #[pyclass(frozen, module = "vrpn", name = "Pose")]
 pub(crate) struct Pose(pub(crate) crate::TrackerPose);
 
-#[pymethods]
-impl Pose {
+stamped_report! { Pose,
     /// Sensor index.
     #[getter]
     fn sensor(&self) -> usize {
@@ -43,28 +85,6 @@ impl Pose {
     #[getter]
     fn quat(&self) -> (f64, f64, f64, f64) {
         xyzw(&self.0.quat)
-    }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(
@@ -82,8 +102,7 @@ impl Pose {
 #[pyclass(frozen, module = "vrpn", name = "Velocity")]
 pub(crate) struct Velocity(pub(crate) crate::TrackerVelocity);
 
-#[pymethods]
-impl Velocity {
+stamped_report! { Velocity,
     /// Sensor index.
     #[getter]
     fn sensor(&self) -> usize {
@@ -111,28 +130,6 @@ impl Velocity {
     fn angular_velocity(&self) -> (f64, f64, f64) {
         vec3(&self.0.angular_velocity())
     }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
-    }
     fn __repr__(&self) -> String {
         format!(
             "Velocity(sensor={}, vel={:?}, time={})",
@@ -147,8 +144,7 @@ impl Velocity {
 #[pyclass(frozen, module = "vrpn", name = "Acceleration")]
 pub(crate) struct Acceleration(pub(crate) crate::TrackerAcceleration);
 
-#[pymethods]
-impl Acceleration {
+stamped_report! { Acceleration,
     /// Sensor index.
     #[getter]
     fn sensor(&self) -> usize {
@@ -170,28 +166,6 @@ impl Acceleration {
     fn acc_quat_dt(&self) -> f64 {
         self.0.acc_quat_dt
     }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
-    }
     fn __repr__(&self) -> String {
         format!(
             "Acceleration(sensor={}, acc={:?}, time={})",
@@ -206,8 +180,7 @@ impl Acceleration {
 #[pyclass(frozen, module = "vrpn", name = "ButtonChange")]
 pub(crate) struct ButtonChange(pub(crate) crate::ButtonChange);
 
-#[pymethods]
-impl ButtonChange {
+stamped_report! { ButtonChange,
     /// Button index.
     #[getter]
     fn button(&self) -> usize {
@@ -223,28 +196,6 @@ impl ButtonChange {
     fn pressed(&self) -> bool {
         self.0.state.is_pressed()
     }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
-    }
     fn __repr__(&self) -> String {
         format!(
             "ButtonChange(button={}, state={}, time={})",
@@ -259,8 +210,7 @@ impl ButtonChange {
 #[pyclass(frozen, module = "vrpn", name = "ButtonStates")]
 pub(crate) struct ButtonStates(pub(crate) crate::ButtonStates);
 
-#[pymethods]
-impl ButtonStates {
+stamped_report! { ButtonStates, no_seq,
     /// State of each button (1 pressed, 0 released), as many as the device has.
     #[getter]
     fn states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
@@ -270,22 +220,6 @@ impl ButtonStates {
     #[getter]
     fn num_buttons(&self) -> usize {
         self.0.num_buttons.min(MAX_BUTTONS)
-    }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
     }
     fn __repr__(&self) -> String {
         format!(
@@ -304,8 +238,7 @@ impl ButtonStates {
 #[pyclass(frozen, module = "vrpn", name = "AnalogReport")]
 pub(crate) struct AnalogReport(pub(crate) crate::AnalogReport);
 
-#[pymethods]
-impl AnalogReport {
+stamped_report! { AnalogReport,
     /// The channel values.
     #[getter]
     fn channels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
@@ -315,28 +248,6 @@ impl AnalogReport {
     #[getter]
     fn num_channels(&self) -> usize {
         self.0.num_channel.min(CHANNEL_MAX)
-    }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(
@@ -351,8 +262,7 @@ impl AnalogReport {
 #[pyclass(frozen, module = "vrpn", name = "DialUpdate")]
 pub(crate) struct DialUpdate(pub(crate) crate::DialUpdate);
 
-#[pymethods]
-impl DialUpdate {
+stamped_report! { DialUpdate,
     /// Dial index.
     #[getter]
     fn dial(&self) -> usize {
@@ -362,28 +272,6 @@ impl DialUpdate {
     #[getter]
     fn change(&self) -> f64 {
         self.0.change
-    }
-    /// Time the server stamped on the report, seconds since the epoch.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time.as_secs_f64()
-    }
-    /// The time exactly as the sender stamped it (its own clock, as logs keep it).
-    #[getter]
-    fn sender_time(&self) -> f64 {
-        self.0.sender_time.as_secs_f64()
-    }
-    /// When it arrived here: the local wall clock (seconds since the epoch) of the
-    /// `mainloop()` pass that read it. `time.time() - arrival` is how old the value is.
-    #[getter]
-    fn arrival(&self) -> f64 {
-        self.0.arrival.as_secs_f64()
-    }
-    /// Which report of its sensor, button or dial this is (1 for the first this remote
-    /// received): a frame loop that sees the same `seq` again saw nothing new.
-    #[getter]
-    fn seq(&self) -> u64 {
-        self.0.seq
     }
     fn __repr__(&self) -> String {
         format!(

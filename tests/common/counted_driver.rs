@@ -1,55 +1,17 @@
-//! A counting global allocator and a driver wrapper that counts the allocations made inside
+//! The counting global allocator (`counting_alloc.rs`) and a driver wrapper that counts the allocations made inside
 //! the driver's own calls, for the drivers' zero-allocation tests (the simulator and the
 //! virtual line allocate freely around them).
 #![allow(dead_code)]
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::time::Instant;
 
 use vrpn::serial::{PortKind, PortOps, SerialDriver};
 use vrpn::{Now, TimeVal};
 
-struct Counting;
-
-thread_local! {
-    pub static ENABLED: Cell<bool> = const { Cell::new(false) };
-    pub static COUNT: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_alloc() {
-    if ENABLED.try_with(Cell::get).unwrap_or(false) {
-        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc(layout)
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        System.alloc_zeroed(layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_alloc();
-        System.realloc(ptr, layout, new_size)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-pub fn counted<T>(f: impl FnOnce() -> T) -> T {
-    ENABLED.with(|e| e.set(true));
-    let out = f();
-    ENABLED.with(|e| e.set(false));
-    out
-}
+#[path = "counting_alloc.rs"]
+mod counting_alloc;
+#[allow(unused_imports)]
+pub use counting_alloc::{counted, counter_works, COUNT, ENABLED};
 
 /// Counts allocations made inside the wrapped driver's calls only (the simulator and the
 /// virtual line allocate freely).
@@ -79,6 +41,7 @@ impl<D: SerialDriver> SerialDriver for Counted<D> {
     }
 }
 
+/// A start time for a virtual line: now, with a fixed wall clock.
 pub fn start() -> Now {
     Now {
         mono: Instant::now(),

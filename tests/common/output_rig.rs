@@ -1,7 +1,7 @@
-//! An end-to-end rig for a device with an Analog_Output that moves something (the Zaber
-//! positioners, the Nikon focus): its simulator on a pseudo-terminal, a `vrpn_server` child,
-//! a TCP client of its Analog and an Analog_Output remote asking for moves, and the checks
-//! against the simulator's log.
+//! An end-to-end rig for a device that something asks to move (the Zaber positioners, the
+//! Nikon focus and the IDEA drive through an Analog_Output, the Tek4662 plotter's pen through
+//! a Poser): its simulator on a pseudo-terminal, a `vrpn_server` child, a TCP client of what
+//! it reports and the remote that asks for moves, and the checks against the simulator's log.
 #![allow(dead_code)]
 
 use std::time::{Duration, Instant};
@@ -25,24 +25,25 @@ pub struct Device<M: DeviceModel + 'static, T> {
     pub reports: fn(&Client, usize) -> HeardValues<T>,
     /// The values the simulator sent, with the moments their first bytes left.
     pub sent: fn(&SimulatedDevice<M>) -> SentValues<T>,
-    /// The channel and value of the `k`-th move.
+    /// The channel and value of the `k`-th move (for an Analog_Output; unused otherwise).
     pub request: fn(i32) -> (i32, f64),
 }
 
-/// The rig. See the module documentation.
-pub struct OutputRig<M: DeviceModel + 'static, T> {
+/// The rig. See the module documentation. `O` is the remote that asks for moves.
+pub struct OutputRig<M: DeviceModel + 'static, T, O = AnalogOutputRemote> {
     pub sim: SimulatedDevice<M>,
     pub server: ServerProcess,
     pub client: Client,
-    pub out: AnalogOutputRemote,
+    pub out: O,
     pub t0: Now,
     device: Device<M, T>,
-    moves: i32,
+    /// How many moves were asked for so far.
+    pub moves: i32,
 }
 
 impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
     /// Starts `server_exe` serving `name` with `line` (the simulator's path in it is
-    /// `{PATH}`), and connects the client and the output remote.
+    /// `{PATH}`), and connects the client (to the Analog) and the Analog_Output remote.
     pub fn start(
         sim: SimulatedDevice<M>,
         server_exe: &str,
@@ -50,12 +51,82 @@ impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
         name: &str,
         device: Device<M, T>,
     ) -> Self {
+        Self::start_with(
+            sim,
+            server_exe,
+            line,
+            name,
+            &[Interface::Analog],
+            device,
+            |at| AnalogOutputRemote::new(at).unwrap(),
+        )
+    }
+
+    /// Asks for `n` moves, each once the previous was reported.
+    pub fn moves(&mut self, n: usize) {
+        self.ask(n, "a move reported", |got, heard, _| got.len() > heard);
+    }
+
+    /// Asks for `n` moves, each once the last value reported has `reached(value, target)`.
+    pub fn moves_to(&mut self, n: usize, reached: fn(&T, f64) -> bool) {
+        self.ask(n, "a move made", |got, _, to| {
+            got.last().is_some_and(|v| reached(v, to))
+        });
+    }
+
+    /// Asks for `n` moves, each once `done(values heard, how many were heard before, target)`.
+    fn ask(&mut self, n: usize, what: &str, done: impl Fn(&[T], usize, f64) -> bool) {
+        for _ in 0..n {
+            let (channel, value) = (self.device.request)(self.moves);
+            self.moves += 1;
+            let heard = self.reports(0).0.len();
+            self.out
+                .request_change_channel_value(channel, value)
+                .unwrap();
+            let (out, reports) = (&self.out, self.device.reports);
+            self.client
+                .wait_until(Duration::from_secs(5), what, &self.server, |c| {
+                    let _ = out.mainloop();
+                    done(&reports(c, 0).0, heard, value)
+                });
+        }
+    }
+
+    /// [`Self::silence_then`] with `n` moves after the reset ("reset complete").
+    pub fn silence_and_move(&mut self, alarm: &str, within: Duration, n: usize) {
+        self.silence_then(
+            alarm,
+            within,
+            "reset complete",
+            Duration::from_secs(6),
+            |r| r.moves(n),
+        );
+    }
+
+    /// [`Self::unplug_then`] with `n` moves after the reset ("reset complete").
+    pub fn unplug_and_move(&mut self, n: usize) {
+        self.unplug_then("reset complete", |r| r.moves(n));
+    }
+}
+
+impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug, O> OutputRig<M, T, O> {
+    /// Starts `server_exe` serving `name` with `line` (the simulator's path in it is
+    /// `{PATH}`), connects the client to `interfaces` and opens the remote that asks for
+    /// moves with `open("name@tcp://127.0.0.1:PORT")`.
+    pub fn start_with(
+        sim: SimulatedDevice<M>,
+        server_exe: &str,
+        line: &str,
+        name: &str,
+        interfaces: &[Interface],
+        device: Device<M, T>,
+        open: impl FnOnce(&str) -> O,
+    ) -> Self {
         let t0 = Now::read();
         let line = line.replace("{PATH}", &sim.path().display().to_string());
         let server = ServerProcess::start(server_exe.as_ref(), &line).unwrap();
-        let client = Client::connect(name, server.port(), &[Interface::Analog]).unwrap();
-        let out =
-            AnalogOutputRemote::new(&format!("{name}@tcp://127.0.0.1:{}", server.port())).unwrap();
+        let client = Client::connect(name, server.port(), interfaces).unwrap();
+        let out = open(&format!("{name}@tcp://127.0.0.1:{}", server.port()));
         OutputRig {
             sim,
             server,
@@ -77,28 +148,6 @@ impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
         (self.device.sent)(&self.sim)
     }
 
-    /// Asks for `n` moves, each once the previous was reported.
-    pub fn moves(&mut self, n: usize) {
-        for _ in 0..n {
-            let (channel, value) = (self.device.request)(self.moves);
-            self.moves += 1;
-            let heard = self.reports(0).0.len();
-            self.out
-                .request_change_channel_value(channel, value)
-                .unwrap();
-            let (out, reports) = (&self.out, self.device.reports);
-            self.client.wait_until(
-                Duration::from_secs(5),
-                "a move reported",
-                &self.server,
-                |c| {
-                    let _ = out.mainloop();
-                    reports(c, 0).0.len() > heard
-                },
-            );
-        }
-    }
-
     /// Reports from log index `from` on are a run of the values logged from `after` on,
     /// stamped with their first bytes.
     pub fn check(&self, from: usize, after: usize) {
@@ -114,18 +163,34 @@ impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
         );
     }
 
+    /// Puts `junk` between the device's records and waits (`within`) until it all went out.
+    pub fn inject_garbage(&self, junk: &[&[u8]], within: Duration) {
+        self.sim.inject_between_records(junk);
+        self.client
+            .wait_until(within, "the garbage sent", &self.server, |_| {
+                self.sim.injected() == junk.len()
+            });
+    }
+
     /// Silences the device until the driver says `alarm` (within `within`), lets it speak
-    /// again, waits for the reset on the open port (no reopening), then asks for `n` moves
-    /// and checks them.
-    pub fn silence_and_move(&mut self, alarm: &str, within: Duration, n: usize) {
+    /// again, waits for the reset on the open port (`reset_done`, within `reset_within`; no
+    /// reopening), then runs `then` (moves) and checks what was reported since.
+    pub fn silence_then(
+        &mut self,
+        alarm: &str,
+        within: Duration,
+        reset_done: &str,
+        reset_within: Duration,
+        then: impl FnOnce(&mut Self),
+    ) {
         let (from, logged) = (self.client.len(), self.sent().0.len());
         self.sim.set_mute(true);
         self.client.wait_text(from, alarm, within, &self.server);
         self.sim.set_mute(false);
         self.client
-            .wait_text(from, "reset complete", Duration::from_secs(6), &self.server);
+            .wait_text(from, reset_done, reset_within, &self.server);
         let after_reset = self.client.len();
-        self.moves(n);
+        then(self);
         self.check(after_reset, logged);
         assert!(!self
             .client
@@ -135,8 +200,9 @@ impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
     }
 
     /// Unplugs the device, waits for the failure and for the port to be open again with the
-    /// device reset, then asks for `n` moves and checks them.
-    pub fn unplug_and_move(&mut self, n: usize) {
+    /// device reset (`reset_done`), then runs `then` (moves) and checks what was reported
+    /// since.
+    pub fn unplug_then(&mut self, reset_done: &str, then: impl FnOnce(&mut Self)) {
         let (from, logged) = (self.client.len(), self.sent().0.len());
         self.sim.unplug();
         self.client
@@ -145,9 +211,9 @@ impl<M: DeviceModel + 'static, T: PartialEq + std::fmt::Debug> OutputRig<M, T> {
         self.client
             .wait_text(from, "is open again", Duration::from_secs(6), &self.server);
         self.client
-            .wait_text(from, "reset complete", Duration::from_secs(6), &self.server);
+            .wait_text(from, reset_done, Duration::from_secs(6), &self.server);
         let after_reset = self.client.len();
-        self.moves(n);
+        then(self);
         self.check(after_reset, logged);
     }
 }

@@ -13,7 +13,7 @@ use vrpn::driver::{Lifecycle, Protocol};
 use vrpn::sim::{DeviceModel, VirtualLine};
 use vrpn::{AnalogRemote, ButtonRemote, Connection};
 
-use super::counted_driver::{Counted, COUNT};
+use super::counted_driver::{start, Counted, COUNT};
 
 /// A driver's lifecycle on a virtual line, its calls counted.
 pub type Line<P, M> = VirtualLine<Counted<Lifecycle<P>>, M>;
@@ -27,6 +27,52 @@ pub fn count_reports(name: &str, conn: &Connection) -> (Rc<Cell<u64>>, AnalogRem
     analog.on_report(move |_| a.set(a.get() + 1));
     buttons.on_change(move |_| b.set(b.get() + 1));
     (n, analog, buttons)
+}
+
+/// A counted driver on a virtual line, the loopback connection it serves on, and the count
+/// of its Analog and Button reports.
+pub struct Rig<P: Protocol, M: DeviceModel> {
+    pub line: Line<P, M>,
+    pub conn: Connection,
+    pub reports: Rc<Cell<u64>>,
+    _remotes: (AnalogRemote, ButtonRemote),
+}
+
+/// Keeps the drivers' texts off the test output, makes the driver `lifecycle` returns on a
+/// loopback connection, counts the reports of its device `name`, and puts the driver, its
+/// calls counted, on a virtual line to `device` (random choices seeded with `seed`).
+pub fn rig<P: Protocol, M: DeviceModel, E: std::fmt::Debug>(
+    name: &str,
+    device: M,
+    seed: u64,
+    lifecycle: impl FnOnce(&Connection) -> Result<Lifecycle<P>, E>,
+) -> Rig<P, M> {
+    quiet_texts();
+    let conn = Connection::new_loopback();
+    let (reports, analog, buttons) = count_reports(name, &conn);
+    let driver = lifecycle(&conn).unwrap();
+    Rig {
+        line: VirtualLine::new(Counted(driver), device, start(), seed),
+        conn,
+        reports,
+        _remotes: (analog, buttons),
+    }
+}
+
+/// The checks after [`stream`]: at least `least` reports and no allocation.
+pub fn assert_streamed(n: u64, least: u64, allocations: u64) {
+    assert!(n >= least, "{n} reports");
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
+}
+
+/// The checks after [`stream_steps`]: at least `least` reports, the noise skipped, and no
+/// allocation.
+pub fn assert_streamed_steps(n: u64, least: u64, allocations: u64, skipped: u64) {
+    assert!(
+        n >= least && skipped > 0,
+        "{n} reports, {skipped} bytes skipped"
+    );
+    assert_eq!(allocations, 0, "allocations while sending {n} reports");
 }
 
 /// Keeps the drivers' texts off the test output.
