@@ -7,13 +7,11 @@
 use std::time::{Duration, Instant};
 
 use vrpn::drivers::crossbow::sim::{CrossbowSim, SimConfig};
-use vrpn::sim::rig::ServerProcess;
 use vrpn::sim::SimulatedDevice;
-use vrpn::Now;
 
 #[path = "common/tracker_e2e.rs"]
 mod tracker_e2e;
-use tracker_e2e::{tracker_client, values, Rig, Values};
+use tracker_e2e::{serve, values, Rig, Values};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -35,13 +33,12 @@ fn crossbow_through_vrpn_server_to_a_client() {
         CrossbowSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!(
-        "vrpn_Tracker_Crossbow Tracker0 {} 38400 4.0 200\n",
-        sim.path().display()
+    let (t0, server, client) = serve(
+        SERVER,
+        &sim,
+        "vrpn_Tracker_Crossbow Tracker0 {PATH} 38400 4.0 200\n",
+        "Tracker0",
     );
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = tracker_client("Tracker0", &server);
     let rig = Rig {
         sim: &sim,
         server: &server,

@@ -7,13 +7,11 @@
 use std::time::{Duration, Instant};
 
 use vrpn::drivers::gps::sim::{GpsSim, SimConfig};
-use vrpn::sim::rig::ServerProcess;
 use vrpn::sim::SimulatedDevice;
-use vrpn::Now;
 
 #[path = "common/tracker_e2e.rs"]
 mod tracker_e2e;
-use tracker_e2e::{tracker_client, values, Rig, Values};
+use tracker_e2e::{serve, values, Rig, Values};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -35,10 +33,12 @@ fn gps_through_vrpn_server_to_a_client() {
         GpsSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!("vrpn_Tracker_GPS Tracker0 {} 38400\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = tracker_client("Tracker0", &server);
+    let (t0, server, client) = serve(
+        SERVER,
+        &sim,
+        "vrpn_Tracker_GPS Tracker0 {PATH} 38400\n",
+        "Tracker0",
+    );
     let rig = Rig {
         sim: &sim,
         server: &server,

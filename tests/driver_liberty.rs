@@ -8,13 +8,12 @@ use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
 use vrpn::drivers::liberty::sim::{Kind, LibertySim, SimConfig};
-use vrpn::sim::rig::{Client, Heard, ServerProcess};
+use vrpn::sim::rig::Client;
 use vrpn::sim::SimulatedDevice;
-use vrpn::Now;
 
 #[path = "common/tracker_e2e.rs"]
 mod tracker_e2e;
-use tracker_e2e::{tracker_client, values, Rig, Values};
+use tracker_e2e::{assert_stylus_toggles, serve, values, Rig, Values};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -35,10 +34,7 @@ fn run(kind: Kind, line: &str, stations: Vec<u8>, stylus: Option<&str>) {
         LibertySim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = line.replace("PORT", &sim.path().display().to_string());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = tracker_client("Tracker0", &server);
+    let (t0, server, client) = serve(SERVER, &sim, line, "Tracker0");
     let pen = stylus.map(|p| Client::connect(p, server.port(), &[Interface::Button]).unwrap());
     let what = format!("{kind:?}");
     let rig = Rig {
@@ -51,22 +47,9 @@ fn run(kind: Kind, line: &str, stations: Vec<u8>, stylus: Option<&str>) {
         seen: &values,
     };
     rig.start(60, 3.0);
+    // The stylus changes every 5 records.
     if let Some(pen) = &pen {
-        pen.pump_until(Duration::from_millis(300), |_| false);
-        let changes: Vec<(usize, bool)> = pen
-            .reports_from(0)
-            .iter()
-            .filter_map(|h| match h {
-                Heard::Button {
-                    button, pressed, ..
-                } => Some((*button, *pressed)),
-                _ => None,
-            })
-            .collect();
-        // The stylus (button 0) changes every 5 records.
-        assert!(changes.len() >= 3, "{changes:?}");
-        assert!(changes.iter().all(|c| c.0 == 0), "{changes:?}");
-        assert!(changes.windows(2).all(|w| w[0].1 != w[1].1), "{changes:?}");
+        assert_stylus_toggles(pen);
     }
     rig.garbage(&[b"LYxx", b"PA\x09junk ", &[0x00, 0xFF, b' ']], 30);
     rig.silence(
@@ -81,7 +64,7 @@ fn run(kind: Kind, line: &str, stations: Vec<u8>, stylus: Option<&str>) {
 fn liberty_with_a_stylus_through_vrpn_server_to_a_client() {
     run(
         Kind::Liberty,
-        "vrpn_Tracker_Liberty Tracker0 PORT 115200 /\nStylus Stylus0 1\n",
+        "vrpn_Tracker_Liberty Tracker0 {PATH} 115200 /\nStylus Stylus0 1\n",
         vec![1, 2],
         Some("Stylus0"),
     );
@@ -91,7 +74,7 @@ fn liberty_with_a_stylus_through_vrpn_server_to_a_client() {
 fn patriot_through_vrpn_server_to_a_client() {
     run(
         Kind::Patriot,
-        "vrpn_Tracker_Liberty Tracker0 PORT 115200\n",
+        "vrpn_Tracker_Liberty Tracker0 {PATH} 115200\n",
         vec![1, 2],
         None,
     );

@@ -9,13 +9,12 @@ use std::time::{Duration, Instant};
 use vrpn::driver::Interface;
 use vrpn::drivers::threespace::record::Model;
 use vrpn::drivers::threespace::sim::{SimConfig, ThreeSpaceSim};
-use vrpn::sim::rig::{Client, Heard, ServerProcess};
+use vrpn::sim::rig::Client;
 use vrpn::sim::SimulatedDevice;
-use vrpn::Now;
 
 #[path = "common/tracker_e2e.rs"]
 mod tracker_e2e;
-use tracker_e2e::{tracker_client, values, Rig, Values};
+use tracker_e2e::{assert_stylus_toggles, serve, values, Rig, Values};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
 
@@ -36,10 +35,7 @@ fn run(model: Model, line: &str, name: &str, stations: Vec<u8>, stylus: Option<&
         ThreeSpaceSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = line.replace("PORT", &sim.path().display().to_string());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = tracker_client(name, &server);
+    let (t0, server, client) = serve(SERVER, &sim, line, name);
     let pen = stylus.map(|p| Client::connect(p, server.port(), &[Interface::Button]).unwrap());
     let rig = Rig {
         sim: &sim,
@@ -51,19 +47,9 @@ fn run(model: Model, line: &str, name: &str, stations: Vec<u8>, stylus: Option<&
         seen: &values,
     };
     rig.start(60, 3.0);
+    // The stylus changes every 7 records.
     if let Some(pen) = &pen {
-        pen.pump_until(Duration::from_millis(300), |_| false);
-        let changes: Vec<bool> = pen
-            .reports_from(0)
-            .iter()
-            .filter_map(|h| match h {
-                Heard::Button { pressed, .. } => Some(*pressed),
-                _ => None,
-            })
-            .collect();
-        // The stylus changes every 7 records.
-        assert!(changes.len() >= 3, "{changes:?}");
-        assert!(changes.windows(2).all(|w| w[0] != w[1]), "{changes:?}");
+        assert_stylus_toggles(pen);
     }
     rig.garbage(&[&[0x00, 0x7F, 0x41], &[0x85, 0x12, 0x33], &[0xFF]], 30);
     rig.silence(
@@ -78,7 +64,7 @@ fn run(model: Model, line: &str, name: &str, stations: Vec<u8>, stylus: Option<&
 fn isotrak_with_a_stylus_through_vrpn_server_to_a_client() {
     run(
         Model::Isotrak,
-        "vrpn_Tracker_Isotrak Iso0 PORT 38400 /\nStylus Pen0 1\n",
+        "vrpn_Tracker_Isotrak Iso0 {PATH} 38400 /\nStylus Pen0 1\n",
         "Iso0",
         vec![1, 2],
         Some("Pen0"),
@@ -89,7 +75,7 @@ fn isotrak_with_a_stylus_through_vrpn_server_to_a_client() {
 fn threespace_through_vrpn_server_to_a_client() {
     run(
         Model::ThreeSpace,
-        "vrpn_Tracker_3Space Tracker0 PORT 38400\n",
+        "vrpn_Tracker_3Space Tracker0 {PATH} 38400\n",
         "Tracker0",
         vec![1, 3],
         None,

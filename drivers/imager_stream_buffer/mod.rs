@@ -1,6 +1,6 @@
 //! `vrpn_Imager_Stream_Buffer NAME UPSTREAM`: an imager served as `NAME` whose frames come
 //! from the imager `UPSTREAM` (`Name@host[:port]`, or `*Name` on this server), relayed in the
-//! server's own loop by [`ImagerRelay`](crate::devices::imager::ImagerRelay). C++ runs a
+//! server's own loop by [`ImagerRelay`]. C++ runs a
 //! second thread for this; here the upstream connection waits in the server's reactor.
 //!
 //! C++'s class is also an auxiliary logger that logs the upstream connection on request;

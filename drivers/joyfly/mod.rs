@@ -16,7 +16,7 @@
 //! # What is sent
 //!
 //! Each joystick report whose seven channels are all within [-0.5, 0.5] moves the pose
-//! ([`JoyFly::step`]); at the next server pass one `vrpn_Tracker Pos_Quat` (sensor 0) reports
+//! ([`Flight::step`]); at the next server pass one `vrpn_Tracker Pos_Quat` (sensor 0) reports
 //! it, stamped with that joystick report's time (C++ stamps 0). A new client connection resets
 //! the pose to the initial matrix, as in C++.
 

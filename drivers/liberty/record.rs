@@ -1,5 +1,5 @@
 //! The Polhemus Liberty / Patriot binary record (`F1`), with the output list the driver sets
-//! (`O<station>,2,7,8[,10],0`: position, quaternion, time stamp, [stylus], space).
+//! (`O<station>,2,7,8[,10],0`: position, quaternion, time stamp, \[stylus\], space).
 //!
 //! | Bytes | Field |
 //! |---|---|

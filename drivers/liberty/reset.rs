@@ -15,7 +15,7 @@
 //!    out: the request is then repeated every [`REBOOT_POLL`] for up to [`REBOOT_LIMIT`].
 //! 4. **Settings**, one every [`CONFIG_GAP`]: `O<s>,2,7,8,0` CR for stations 1 to 8
 //!    (`O<s>,2,7,8,10,0` for a station with a stylus): position, quaternion, time stamp,
-//!    [stylus], space; `X0,1,0,0` CR and `Y0,1,0,0` CR (no filtering, as C++ configures it);
+//!    \[stylus\], space; `X0,1,0,0` CR and `Y0,1,0,0` CR (no filtering, as C++ configures it);
 //!    the entry's extra reset commands (`*N` pauses N seconds).
 //! 5. **Settle**: the line quiet for [`QUIET`] (replies to the settings, a Patriot's
 //!    complaints about stations it lacks), at most [`QUIET_LIMIT`]; input flushed.

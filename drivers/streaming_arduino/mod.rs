@@ -32,7 +32,7 @@
 //!
 //! More than 2 s without a line sends two error texts, and the port is reopened (which
 //! restarts the Arduino) and the sketch set up again. Lines are read byte by byte
-//! ([`line`]); a line without `ANALOGS` numbers is skipped and reported, at most once a
+//! ([`line`](mod@line)); a line without `ANALOGS` numbers is skipped and reported, at most once a
 //! second, instead of resetting the device as C++ does.
 //!
 //! # Differences from C++ VRPN

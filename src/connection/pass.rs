@@ -16,8 +16,8 @@ impl Connection {
     /// queued output.
     ///
     /// A pass is bounded, so it returns even while data arrives faster than callbacks handle
-    /// it: it takes at most [`Limits::max_messages_per_peer_per_loop`] messages from each
-    /// peer and stops delivering after [`Limits::max_pass_time`] (plus the callback running
+    /// it: it takes at most [`Limits::max_messages_per_peer_per_loop`](crate::Limits::max_messages_per_peer_per_loop) messages from each
+    /// peer and stops delivering after [`Limits::max_pass_time`](crate::Limits::max_pass_time) (plus the callback running
     /// then); what remains stays buffered for the next call, and
     /// [`poll_timeout`](Self::poll_timeout) is then due at once, so a loop waiting in
     /// [`wait`](Self::wait) does not sleep on it. A callback can end the pass early with

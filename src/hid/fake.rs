@@ -203,7 +203,7 @@ impl FakeTree {
 }
 
 /// The device half of a stand-in: what a simulator holds. Made by a listener at the node's
-/// path ([`DeviceEnd::accept`]) or from `socketpair`s.
+/// path ([`NodeListener::accept`]) or from `socketpair`s.
 #[derive(Debug)]
 pub struct DeviceEnd {
     /// Input reports go out here; output reports come in.

@@ -3,11 +3,11 @@
 //! uevent socket for hot-plug. No hidapi, no libusb, no C.
 //!
 //! - [`sysfs`]: enumeration (vendor, product, interface, serial, name, capabilities) under a
-//!   [`DeviceTree`] whose roots are injectable, so tests use a fake tree ([`fake`]).
+//!   [`DeviceTree`] whose roots are injectable, so tests use a fake tree (module `fake`, with the `sim` feature).
 //! - [`uevent`] parses kernel uevent messages; [`hotplug`] listens for them in the reactor.
 //! - [`source`]: an open hidraw node (one report per `read`, output reports by `write`,
 //!   feature reports by ioctl, [`ioctl`]) or a simulator's socket pair standing in for one;
-//!   [`evdev`]: `input_event` records from an event node or a pipe.
+//!   [`evdev`](crate::drivers::evdev): `input_event` records from an event node or a pipe.
 //! - [`driver`]: the sans-IO [`HidDriver`] interface and how a driver names the nodes it
 //!   wants ([`HidMatch`]); [`device`]: [`HidDevice`], which runs a driver as a server device,
 //!   waiting for absent devices and picking up unplugged ones when they return.

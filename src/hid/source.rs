@@ -4,7 +4,7 @@
 //! device numbers its reports), takes an output report per `write`, and feature reports
 //! through ioctls. The stand-in is a pair of `SOCK_SEQPACKET` Unix sockets, which keep message
 //! boundaries the same way, so a device simulator can sit behind a fake device tree
-//! (its side is [`super::fake::DeviceEnd`], with the `sim` feature):
+//! (its side is `fake::DeviceEnd`, with the `sim` feature):
 //!
 //! - the *data* socket carries input reports from the device (one datagram per report, the
 //!   bytes hidraw would return) and output reports to it (one datagram per `write`);

@@ -141,7 +141,7 @@ pub const DEFAULT_BUSY_WINDOW: Duration = Duration::from_millis(2);
 /// progress, devices and logs.
 const DESCRIPTORS_WANTED: u64 = 4096;
 
-/// Raises this process's soft limit on open descriptors towards [`DESCRIPTORS_WANTED`] (never
+/// Raises this process's soft limit on open descriptors towards 4,096 (never
 /// above the hard limit, never lowering it): the common default of 1,024 is short of what 255
 /// clients and a burst of call-backs take. Returns the soft limit in force afterwards.
 pub fn raise_descriptor_limit() -> Option<u64> {

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
 use vrpn::sim::rig::{
-    assert_first_byte_stamps, assert_run_of, resume_after, Client, ServerProcess,
+    assert_first_byte_stamps, assert_run_of, resume_after, Client, Heard, ServerProcess,
 };
 use vrpn::sim::{DeviceModel, SimulatedDevice};
 use vrpn::{Now, TrackerPose};
@@ -150,6 +150,40 @@ impl<M: DeviceModel + 'static, V: PartialEq + Debug> Rig<'_, M, V> {
             .wait_text(from, "is open again", Duration::from_secs(1), self.server);
         self.check(from, logged);
     }
+}
+
+/// Starts `server_exe` on the vrpn.cfg `line` (`{PATH}` in it stands for the simulator's
+/// path) and connects a client of `name`'s tracker; returns the moment before the start too.
+pub fn serve<M: DeviceModel + 'static>(
+    server_exe: &str,
+    sim: &SimulatedDevice<M>,
+    line: &str,
+    name: &str,
+) -> (Now, ServerProcess, Client) {
+    let t0 = Now::read();
+    let line = line.replace("{PATH}", &sim.path().display().to_string());
+    let server = ServerProcess::start(server_exe.as_ref(), &line).unwrap();
+    let client = tracker_client(name, &server);
+    (t0, server, client)
+}
+
+/// Lets a client of a stylus (a Button) listen 300 ms more, then checks what it heard: at
+/// least three changes, all of button 0, pressed and released in turn.
+pub fn assert_stylus_toggles(pen: &Client) {
+    pen.pump_until(Duration::from_millis(300), |_| false);
+    let changes: Vec<(usize, bool)> = pen
+        .reports_from(0)
+        .iter()
+        .filter_map(|h| match h {
+            Heard::Button {
+                button, pressed, ..
+            } => Some((*button, *pressed)),
+            _ => None,
+        })
+        .collect();
+    assert!(changes.len() >= 3, "{changes:?}");
+    assert!(changes.iter().all(|c| c.0 == 0), "{changes:?}");
+    assert!(changes.windows(2).all(|w| w[0].1 != w[1].1), "{changes:?}");
 }
 
 /// A client of `name`'s tracker (and texts) on `server`.
