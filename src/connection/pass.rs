@@ -27,11 +27,24 @@ impl Connection {
     /// only one of them called). Called from inside a callback it returns at once (the outer
     /// call does the work).
     pub fn mainloop(&self) -> Result<(), Error> {
+        self.pass(true)
+    }
+
+    /// [`mainloop`](Self::mainloop) right after this connection's reactor was polled (the
+    /// server loop's wait): the readiness that poll recorded is what this pass's own poll would
+    /// find, so the pass does without one (one `epoll_wait` per server pass instead of two).
+    /// What arrives after that poll wakes the next wait at once.
+    pub(crate) fn mainloop_after_poll(&self) -> Result<(), Error> {
+        self.pass(false)
+    }
+
+    #[inline(always)]
+    fn pass(&self, poll: bool) -> Result<(), Error> {
         if self.inner.depth.get() > 0 {
             return Ok(());
         }
         crate::net::clear_interrupt();
-        if let Some(r) = &self.inner.reactor {
+        if let Some(r) = self.inner.reactor.as_ref().filter(|_| poll) {
             r.poll_now().map_err(|e| Error::io("polling sockets", e))?;
         }
         let clock = &self.inner.clock;

@@ -126,6 +126,9 @@ struct Shared {
     /// Data arrived since the last [`Reactor::take_activity`] (outside the `RefCell`: every
     /// read that brings data notes it).
     activity: Cell<bool>,
+    /// Polls made, for the tests that count them.
+    #[cfg(test)]
+    polls: Cell<u64>,
 }
 
 impl std::fmt::Debug for Reactor {
@@ -161,6 +164,8 @@ impl Reactor {
                     timed: 0,
                 }),
                 activity: Cell::new(false),
+                #[cfg(test)]
+                polls: Cell::new(0),
             }),
         })
     }
@@ -297,6 +302,8 @@ impl Reactor {
     }
 
     fn poll(&self, timeout: Option<Duration>) -> io::Result<bool> {
+        #[cfg(test)]
+        self.inner.polls.set(self.inner.polls.get() + 1);
         let mut inner = self.inner.state.borrow_mut();
         let inner = &mut *inner;
         match inner.poll.poll(&mut inner.events, timeout) {
@@ -413,6 +420,12 @@ impl Reactor {
     /// window).
     pub fn take_activity(&self) -> bool {
         self.inner.activity.replace(false)
+    }
+
+    /// Polls made so far (`epoll_wait` calls).
+    #[cfg(test)]
+    pub(crate) fn polls(&self) -> u64 {
+        self.inner.polls.get()
     }
 
     /// Notes that data arrived outside a poll (a read that found more than readiness said).

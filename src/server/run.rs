@@ -24,6 +24,8 @@ pub struct ServerLoop {
     last_left: std::rc::Rc<std::cell::Cell<bool>>,
     last_activity: Option<Instant>,
     flush_logs: bool,
+    /// [`wait`](Self::wait) polled the reactor: the next pass's connection need not poll again.
+    polled: bool,
 }
 
 impl ServerLoop {
@@ -41,6 +43,7 @@ impl ServerLoop {
             last_left,
             last_activity: None,
             flush_logs: false,
+            polled: false,
         }
     }
 
@@ -63,10 +66,15 @@ impl ServerLoop {
     /// should end (`-q` and the last client left).
     pub fn pass(&mut self) -> Result<bool, Error> {
         let now = crate::net::clock();
+        let polled = std::mem::take(&mut self.polled);
         for d in &mut self.devices {
             d.mainloop(now);
         }
-        self.conn.mainloop()?;
+        if polled {
+            self.conn.mainloop_after_poll()?;
+        } else {
+            self.conn.mainloop()?;
+        }
         if self.flush_logs {
             self.conn.flush_logs()?;
         }
@@ -110,11 +118,13 @@ impl ServerLoop {
             reactor
                 .poll_now()
                 .map_err(|e| Error::io("polling sockets", e))?;
+            self.polled = true;
             return Ok(());
         }
         let woke = reactor
             .wait(self.next_deadline(), max_block)
             .map_err(|e| Error::io("polling sockets", e))?;
+        self.polled = true;
         if woke {
             self.last_activity = Some(Instant::now());
         }
@@ -152,4 +162,67 @@ pub fn raise_descriptor_limit() -> Option<u64> {
         return Some(want);
     }
     Some(soft)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::class;
+    use crate::{Limits, SenderFilter, TimeVal};
+    use std::cell::Cell;
+    use std::net::Ipv4Addr;
+    use std::rc::Rc;
+
+    /// The pass after a wait does not poll the reactor again (the wait just did): one poll per
+    /// loop iteration, whether the wait blocked or spun in the busy window, and every message a
+    /// client sends is still delivered, each before the next is sent.
+    #[test]
+    fn one_poll_per_loop_iteration() {
+        let server = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+        let port = server.local_port().unwrap();
+        let t = server.register_type("loop test").unwrap();
+        let got = Rc::new(Cell::new(0usize));
+        let g = got.clone();
+        server.register_handler(t, SenderFilter::Any, move |_| g.set(g.get() + 1));
+        let reactor = server.reactor().unwrap();
+        let sleep = SleepPolicy::EventDriven {
+            busy_window: Duration::from_millis(2),
+            max_block: Duration::from_millis(5),
+        };
+        let mut lp = ServerLoop::new(server, Vec::new(), sleep);
+
+        let client = Connection::client("127.0.0.1", port, true, Limits::default()).unwrap();
+        let ct = client.register_type("loop test").unwrap();
+        let cs = client.register_sender("loop test client").unwrap();
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while !(client.connected() && lp.connection().connected()) {
+            assert!(Instant::now() < deadline, "never connected");
+            client.mainloop().unwrap();
+            lp.pass().unwrap();
+            lp.wait().unwrap();
+        }
+
+        const MESSAGES: usize = 50;
+        let polls_before = reactor.polls();
+        let mut iterations = 0;
+        for k in 1..=MESSAGES {
+            client
+                .pack_message(TimeVal::now(), ct, cs, &[], class::RELIABLE)
+                .unwrap();
+            while got.get() < k {
+                assert!(Instant::now() < deadline, "message {k} never arrived");
+                client.mainloop().unwrap();
+                lp.wait().unwrap();
+                lp.pass().unwrap();
+                iterations += 1;
+            }
+        }
+        assert_eq!(got.get(), MESSAGES);
+        assert_eq!(
+            reactor.polls() - polls_before,
+            iterations,
+            "{iterations} loop iterations polled the reactor {} times",
+            reactor.polls() - polls_before
+        );
+    }
 }
