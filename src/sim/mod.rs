@@ -18,6 +18,8 @@
 //!
 //! docs/DRIVERS.md ("Adding a driver") shows them together.
 
+#[cfg(test)]
+pub(crate) mod analog_rig;
 mod catalog;
 mod first_write;
 mod line;
