@@ -2,106 +2,37 @@
 //! Analog remote on one in-process connection: start-up, exact values and stamps, information
 //! packets among the data, garbage, the watchdog, the configuration line.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use super::config::Glove5dt16;
 use super::sim::{Glove16Sim, SimConfig};
 use super::Glove16Protocol;
-use crate::devices::base::{set_print_threshold, TEXT_MESSAGE};
-use crate::devices::text::{decode_text, TextSeverity};
+use crate::devices::base::set_print_threshold;
+use crate::devices::text::TextSeverity;
 use crate::driver::Lifecycle;
 use crate::server::config::{parse_one, parse_str};
 use crate::server::{build_devices, BuildNote};
-use crate::sim::VirtualLine;
-use crate::{AnalogRemote, Connection, Now, SenderFilter, TimeVal};
+use crate::sim::analog_rig::AnalogLine;
+use crate::Connection;
 
-type Heard = Rc<RefCell<Vec<(Vec<f64>, TimeVal)>>>;
-
-struct Rig {
-    line: VirtualLine<Lifecycle<Glove16Protocol>, Glove16Sim>,
-    start: Now,
-    heard: Heard,
-    texts: Rc<RefCell<Vec<String>>>,
-    _remote: AnalogRemote,
-    _conn: Connection,
-}
+type Rig = AnalogLine<Lifecycle<Glove16Protocol>, Glove16Sim>;
 
 fn rig(cfg_line: &str, seed: u64) -> Rig {
-    set_print_threshold(TextSeverity::Other(u32::MAX));
     let cfg: Glove5dt16 = parse_one(cfg_line);
-    let conn = Connection::new_loopback();
-    let driver = cfg.lifecycle(&conn).unwrap();
-    let heard: Heard = Rc::default();
-    let remote = AnalogRemote::on_connection(&cfg.name, &conn).unwrap();
-    let h = heard.clone();
-    remote.on_report(move |a| {
-        h.borrow_mut()
-            .push((a.channel[..a.num_channel].to_vec(), a.time))
-    });
-    let texts: Rc<RefCell<Vec<String>>> = Rc::default();
-    let sender = conn.register_sender(&cfg.name).unwrap();
-    let text_type = conn.register_type(TEXT_MESSAGE).unwrap();
-    let t = texts.clone();
-    conn.register_handler(text_type, SenderFilter::Only(sender), move |m| {
-        if let Some((_, _, text)) = decode_text(m.payload) {
-            t.borrow_mut().push(text.to_owned());
-        }
-    });
     let mut sim = SimConfig::new(cfg.baud);
     sim.keep_log = true;
-    let start = Now {
-        mono: Instant::now(),
-        wall: TimeVal::new(1_700_000_000, 0),
-    };
-    Rig {
-        line: VirtualLine::new(driver, Glove16Sim::new(sim), start, seed),
-        start,
-        heard,
-        texts,
-        _remote: remote,
-        _conn: conn,
-    }
-}
-
-impl Rig {
-    fn run_until_reports(&mut self, n: usize, max: Duration) {
-        let h = self.heard.clone();
-        assert!(
-            self.line.run_until(max, |_| h.borrow().len() >= n),
-            "{} of {n} reports; texts {:?}",
-            self.heard.borrow().len(),
-            self.texts.borrow()
-        );
-    }
-
-    /// Reports from `from` on are a contiguous run of the records logged from `after` on,
-    /// each stamped with its first byte.
-    fn check(&self, from: usize, after: usize) -> usize {
-        let heard = self.heard.borrow();
-        let got = &heard[from..];
-        let sent = self.line.device.sent();
-        let start = (after..sent.len())
-            .find(|&i| sent[i].channels[..] == got[0].0[..])
-            .unwrap_or_else(|| panic!("first report {:?} never sent", got[0]));
-        for (i, (channels, time)) in got.iter().enumerate() {
-            let s = &sent[start + i];
-            assert_eq!(channels[..], s.channels[..], "report {i}");
-            if !self.line.read_lag.is_zero() {
-                // A slow read's records all carry its wake time: values only.
-                continue;
-            }
-            let want = self.start.wall.plus(s.first_byte - self.start.mono);
-            let late = time.seconds_since(want);
-            assert!((0.0..0.002).contains(&late), "report {i}: {late} s late");
-        }
-        start
-    }
-
-    fn has_text(&self, part: &str) -> bool {
-        self.texts.borrow().iter().any(|t| t.contains(part))
-    }
+    AnalogLine::new(
+        &cfg.name,
+        |conn| cfg.lifecycle(conn).unwrap(),
+        Glove16Sim::new(sim),
+        seed,
+        |m| {
+            m.sent()
+                .iter()
+                .map(|s| (s.channels.to_vec(), s.first_byte))
+                .collect()
+        },
+    )
 }
 
 const LINE: &str = "vrpn_5dt16 glove_5dt16 /dev/ttyS0 19200\n";
