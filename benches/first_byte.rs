@@ -10,7 +10,9 @@
 //! * `startup`: server start to the first report at a client, Fastrak and Flock of Birds
 //!   simulators on pseudo-terminals, three runs each.
 //! * `trackers`: the bare-pty baseline again, then first-byte accuracy and start-up of the
-//!   Polaris, Liberty, ISOTRAK and 3SPACE drivers on their simulators (`serial_trackers.rs`).
+//!   Polaris, Liberty, ISOTRAK and 3SPACE drivers on their simulators (`serial_trackers.rs`):
+//!   each report's stamp against the write of its own record's first byte (a frame's second
+//!   station leaves a record's transmission after the first), matched by sensor and values.
 //! * `khz`: a `vrpn_server` child process with a 1 kHz NULL tracker: report intervals as a
 //!   client sees them (sender timestamps) and the server's CPU over 10 s (from /proc).
 //!

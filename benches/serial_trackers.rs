@@ -3,11 +3,18 @@
 //! each on its simulator on a pseudo-terminal, served by our server in a thread and read by a
 //! `TrackerRemote` on 127.0.0.1 (UDP path).
 //!
-//! A simulator step notes the wall time just before its write for every record it logged in
-//! that step (the write that carries the record's first byte); each pose the client receives
-//! is matched to its record by its exact values. Printed per tracker: report timestamp −
-//! first-byte write (p50 / p90 / p99 / max), and the time from the server's start to the
-//! first pose. Compare with the bare-pty baseline the bench prints first.
+//! The simulators pace their bytes at the line's baud rate and log every record with the wall
+//! time read just before the write that carried *that record's* first byte (`written`: for
+//! the second station of a frame, a whole record's transmission after the first station's;
+//! for the Polaris, whose tools share a reply, the reply's first byte). Each pose the client
+//! receives is matched to its record by sensor and by its exact values (a function of the
+//! record's sequence number), each sensor in its own order, so a pose lost on one station
+//! never shifts the other's. The report timestamp is the server's own (`sender_time`, not
+//! the clock-synchronised `time`, which moves by the estimate's microseconds). Printed per
+//! tracker: report timestamp − first-byte write (p50 / p90 / p99 / max), how many stamps
+//! came out earlier than their first byte's write (none can be right), and the time from the
+//! server's start to the first pose. Compare with the bare-pty baseline (wake − write) the
+//! bench prints first, in the same run.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -18,24 +25,28 @@ use vrpn::drivers::liberty::sim::{Kind, LibertySim, SimConfig as LibertyConfig};
 use vrpn::drivers::polaris::sim::{PolarisSim, SimConfig as PolarisConfig};
 use vrpn::drivers::threespace::record::Model;
 use vrpn::drivers::threespace::sim::{SimConfig as ThreeSpaceConfig, ThreeSpaceSim};
-use vrpn::sim::{DeviceModel, PtyDevice};
-use vrpn::{TimeVal, TrackerRemote};
+use vrpn::sim::DeviceModel;
+use vrpn::{Now, TimeVal, TrackerRemote};
 
 use super::{micros, print_us, tty_dir, tty_path, ServerThread, SimThread};
 
 /// Poses measured per tracker (override with `FIRST_BYTE_RECORDS`).
 const POSES: usize = 1500;
 
+/// Sensor, position, quaternion (x, y, z, w): what a client receives.
 type Values = (usize, [f64; 3], [f64; 4]);
 type Log = Arc<Mutex<Vec<(Values, TimeVal)>>>;
+/// The simulator's log entry `i`: what the client must receive for it and, once its first
+/// byte has been written, when.
+type Entry<M> = fn(&M, usize) -> Option<(Values, Option<Now>)>;
 
-/// Runs the simulator `model` with the log reader `logged`, serves it with `cfg` (`PATH` is
+/// Runs the simulator `model` with the log reader `entry`, serves it with `cfg` (`PATH` is
 /// the pseudo-terminal), and prints the figures.
 fn measure<M: DeviceModel + 'static>(
     label: &str,
     cfg: &str,
     model: impl FnOnce() -> M + Send + 'static,
-    logged: fn(&PtyDevice<M>) -> Vec<Values>,
+    entry: Entry<M>,
 ) {
     let poses: usize = std::env::var("FIRST_BYTE_RECORDS")
         .ok()
@@ -45,13 +56,13 @@ fn measure<M: DeviceModel + 'static>(
     let sent: Log = Arc::default();
     let s = sent.clone();
     let mut seen = 0usize;
-    let _sim = SimThread::start(&path, model, move |dev, now| {
-        let all = logged(dev);
-        if all.len() > seen {
-            s.lock()
-                .unwrap()
-                .extend(all[seen..].iter().map(|&v| (v, now.wall)));
-            seen = all.len();
+    let _sim = SimThread::start(&path, model, move |dev, _| {
+        // Entries are taken in order once written (a record queued but not yet on the line
+        // waits for a later step).
+        let mut s = s.lock().unwrap();
+        while let Some((values, Some(at))) = entry(&dev.model, seen) {
+            s.push((values, at.wall));
+            seen += 1;
         }
     });
     let cfg = cfg.replace("PATH", &path.display().to_string());
@@ -64,7 +75,7 @@ fn measure<M: DeviceModel + 'static>(
         let q = p.quat.into_inner();
         g.borrow_mut().push((
             (p.sensor, [p.pos.x, p.pos.y, p.pos.z], [q.i, q.j, q.k, q.w]),
-            p.time,
+            p.sender_time,
         ))
     });
     let limit = Instant::now() + Duration::from_secs(120);
@@ -83,20 +94,7 @@ fn measure<M: DeviceModel + 'static>(
     }
     drop(server);
     let sent = sent.lock().unwrap();
-    let (mut lags, mut unmatched, mut cursor) = (Vec::new(), 0, 0);
-    for (values, stamp) in got.borrow().iter() {
-        match sent[cursor..]
-            .iter()
-            .take(400)
-            .position(|(v, _)| v == values)
-        {
-            Some(i) => {
-                lags.push(micros(*stamp, sent[cursor + i].1));
-                cursor += i + 1;
-            }
-            None => unmatched += 1,
-        }
-    }
+    let (lags, unmatched) = match_by_sensor(&sent, &got.borrow());
     println!(
         "{label}: {} poses, {} matched, {unmatched} unmatched; server start to first pose \
          {:.0} ms",
@@ -104,7 +102,41 @@ fn measure<M: DeviceModel + 'static>(
         lags.len(),
         first.unwrap_or_default().as_secs_f64() * 1e3
     );
+    // A stamp before the write that carried the first byte cannot be right (the clock the
+    // bench and the server read is the same): counted apart, beside the quantiles.
+    let early = lags.iter().filter(|&&l| l < 0).count();
     print_us("  report timestamp - first-byte write", lags);
+    println!("  stamps earlier than their first byte's write: {early}");
+}
+
+/// Pairs each received pose with the logged record of the same sensor and values, searching
+/// forward from that sensor's last match (records of a sensor arrive in order; a few may be
+/// lost at start-up). Returns stamp − first-byte write per pair, in µs, and how many poses
+/// matched nothing.
+fn match_by_sensor(sent: &[(Values, TimeVal)], got: &[(Values, TimeVal)]) -> (Vec<i64>, usize) {
+    let mut cursor: Vec<usize> = Vec::new();
+    let (mut lags, mut unmatched) = (Vec::new(), 0);
+    for (values, stamp) in got {
+        let sensor = values.0;
+        if cursor.len() <= sensor {
+            cursor.resize(sensor + 1, 0);
+        }
+        let from = cursor[sensor];
+        let hit = sent[from..]
+            .iter()
+            .enumerate()
+            .filter(|(_, (v, _))| v.0 == sensor)
+            .take(200)
+            .find(|(_, (v, _))| v == values);
+        match hit {
+            Some((i, &(_, wrote))) => {
+                lags.push(micros(*stamp, wrote));
+                cursor[sensor] = from + i + 1;
+            }
+            None => unmatched += 1,
+        }
+    }
+    (lags, unmatched)
 }
 
 /// Polaris, Liberty, ISOTRAK and 3SPACE, one after the other.
@@ -129,7 +161,7 @@ pub fn run() {
             c.keep_log = true;
             PolarisSim::new(c)
         },
-        |d| d.model.sent().iter().map(|s| s.values).collect(),
+        |m, i| m.sent().get(i).map(|s| (s.values, s.written)),
     );
     measure(
         "Liberty (2 stations, 60 Hz, 115200 baud)",
@@ -140,7 +172,7 @@ pub fn run() {
             c.stations = vec![1, 2];
             LibertySim::new(c)
         },
-        |d| d.model.sent().iter().map(|s| s.sample.expected()).collect(),
+        |m, i| m.sent().get(i).map(|s| (s.sample.expected(), s.written)),
     );
     for (label, line, model) in [
         (
@@ -163,7 +195,7 @@ pub fn run() {
                 c.stations = vec![1, 2];
                 ThreeSpaceSim::new(c)
             },
-            |d| d.model.sent().iter().map(|s| s.sample.expected()).collect(),
+            |m, i| m.sent().get(i).map(|s| (s.sample.expected(), s.written)),
         );
     }
 }

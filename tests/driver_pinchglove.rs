@@ -8,12 +8,15 @@ use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
 use vrpn::drivers::pinchglove::sim::{expected_changes, PinchSim, SimConfig};
-use vrpn::sim::rig::{Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
 
+#[path = "common/event_rig.rs"]
+mod event_rig;
 #[path = "common/events.rs"]
 mod events;
+use event_rig::{Device, EventRig};
 use events::{check_run, first_from};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
@@ -47,10 +50,6 @@ fn want(sim: &SimulatedDevice<PinchSim>) -> Want {
     })
 }
 
-fn logged(sim: &SimulatedDevice<PinchSim>) -> usize {
-    sim.model(|m| m.sent().len())
-}
-
 /// The log index just after the first text containing `part` heard at `from` or later.
 fn after_text(c: &Client, from: usize, part: &str) -> usize {
     from + 1
@@ -68,119 +67,95 @@ fn pinch_glove_through_vrpn_server_to_a_client() {
         PinchSim::new(cfg)
     })
     .unwrap();
-    let t0 = Now::read();
-    let line = format!(
-        "vrpn_Button_PinchGlove Pinch0 {} 9600\n",
-        sim.path().display()
+    let device = Device {
+        what: "PinchGlove",
+        unit: "change",
+        heard,
+        want,
+        skip_first: true,
+    };
+    let r = EventRig::start(
+        sim,
+        SERVER,
+        "vrpn_Button_PinchGlove Pinch0 {PATH} 9600\n",
+        "Pinch0",
+        &[Interface::Button],
+        device,
     );
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect("Pinch0", server.port(), &[Interface::Button]).unwrap();
-    let changes = |c: &Client| heard(c, 0).len();
 
     // 1. Start-up (T0 answered) and exact changes.
-    client.wait_until(Duration::from_secs(10), "a first change", &server, |c| {
-        changes(c) >= 1
-    });
-    let startup = heard(&client, 0)[0].1.seconds_since(t0.wall);
-    eprintln!(
-        "PinchGlove: vrpn_server start to first report {:.0} ms",
-        startup * 1e3
-    );
-    client.wait_until(Duration::from_secs(10), "60 changes", &server, |c| {
-        changes(c) >= 60
-    });
-    let (w, at) = want(&sim);
-    check_run(&heard(&client, 0), &w, &at, 0, true, t0, "PinchGlove");
+    r.start_up("PinchGlove", 60);
 
     // 2. Garbage and damaged messages between messages: reported, nothing else lost.
     let junk: [&[u8]; 4] = [&[0x33, 0x44], &[0x8F], &[0x80, 0x10], &[0x85, 0x20, 0x8F]];
-    sim.inject_between_records(&junk);
-    client.wait_until(Duration::from_secs(10), "the garbage sent", &server, |_| {
-        sim.injected() == junk.len()
-    });
-    let n = changes(&client);
-    client.wait_until(
-        Duration::from_secs(5),
-        "changes after garbage",
-        &server,
-        |c| changes(c) >= n + 30,
-    );
-    let (w, at) = want(&sim);
-    check_run(
-        &heard(&client, 0),
-        &w,
-        &at,
-        0,
-        true,
-        t0,
-        "PinchGlove after garbage",
-    );
-    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
-    client.wait_text(
+    r.garbage(&junk, 30);
+    r.client.wait_text(
         0,
         "wrong message start byte (0x85)",
         Duration::from_secs(1),
-        &server,
+        &r.server,
     );
 
     // 3. Silence: probed after 2 s, reset after 3 s; the changes resume, none invented.
-    let (from, before) = (client.len(), logged(&sim));
-    sim.model(|m| m.mute = true);
-    client.wait_text(
+    let (from, before) = (r.client.len(), r.logged());
+    r.sim.model(|m| m.mute = true);
+    r.client.wait_text(
         from,
         "no answer to a T0 probe, resetting",
         Duration::from_secs(5),
-        &server,
+        &r.server,
     );
-    let quiet = heard(&client, from).len();
-    sim.model(|m| m.mute = false);
-    client.wait_until(
+    let quiet = heard(&r.client, from).len();
+    r.sim.model(|m| m.mute = false);
+    r.client.wait_until(
         Duration::from_secs(5),
         "changes after silence",
-        &server,
+        &r.server,
         |c| heard(c, from).len() >= quiet + 30,
     );
-    let (w, at) = want(&sim);
+    let (w, at) = want(&r.sim);
     let after = first_from(&w, before.saturating_sub(10));
     check_run(
-        &heard(&client, from),
+        &heard(&r.client, from),
         &w,
         &at,
         after,
         false,
-        t0,
+        r.t0,
         "PinchGlove after silence",
     );
 
     // 4. Unplugged: reported, nothing while unplugged, reopened when back, resumed.
-    let (from, before) = (client.len(), logged(&sim));
-    sim.unplug();
-    client.wait_text(from, "failed", Duration::from_secs(3), &server);
-    let while_unplugged = heard(&client, from).len();
-    client.pump_until(Duration::from_millis(500), |_| false);
+    let (from, before) = (r.client.len(), r.logged());
+    r.sim.unplug();
+    r.client
+        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
+    let while_unplugged = heard(&r.client, from).len();
+    r.client.pump_until(Duration::from_millis(500), |_| false);
     assert_eq!(
-        heard(&client, from).len(),
+        heard(&r.client, from).len(),
         while_unplugged,
         "changes while unplugged"
     );
-    sim.plug().unwrap();
-    client.wait_text(from, "is open again", Duration::from_secs(3), &server);
-    let fresh = after_text(&client, from, "is open again");
-    client.wait_until(
+    r.sim.plug().unwrap();
+    r.client
+        .wait_text(from, "is open again", Duration::from_secs(3), &r.server);
+    let fresh = after_text(&r.client, from, "is open again");
+    r.client.wait_until(
         Duration::from_secs(6),
         "changes after plugging back",
-        &server,
+        &r.server,
         |c| heard(c, fresh).len() >= 30,
     );
-    let (w, at) = want(&sim);
+    let (w, at) = want(&r.sim);
     let after = first_from(&w, before);
     check_run(
-        &heard(&client, fresh),
+        &heard(&r.client, fresh),
         &w,
         &at,
         after,
         true,
-        t0,
+        r.t0,
         "PinchGlove after unplugging",
     );
 }

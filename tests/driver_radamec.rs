@@ -51,6 +51,7 @@ fn radamec_through_vrpn_server_to_a_client() {
     .unwrap();
     let device = Device {
         what: "Radamec",
+        unit: "report",
         heard,
         want,
         skip_first: false,

@@ -71,6 +71,7 @@ fn sgi_boxes_through_vrpn_server_to_a_client() {
     .unwrap();
     let device = Device {
         what: "SGI box",
+        unit: "report",
         heard,
         want: reports,
         skip_first: false,

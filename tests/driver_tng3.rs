@@ -56,6 +56,7 @@ fn tng3_through_vrpn_server_to_a_client() {
     .unwrap();
     let device = Device {
         what: "TNG-3",
+        unit: "report",
         heard,
         want,
         skip_first: true,

@@ -8,12 +8,15 @@ use std::time::{Duration, Instant};
 
 use vrpn::driver::Interface;
 use vrpn::drivers::wanda::sim::{expected, Report, SimConfig, WandaSim};
-use vrpn::sim::rig::{Client, Heard, ServerProcess};
+use vrpn::sim::rig::{Client, Heard};
 use vrpn::sim::SimulatedDevice;
-use vrpn::{Now, TimeVal};
+use vrpn::TimeVal;
 
+#[path = "common/event_rig.rs"]
+mod event_rig;
 #[path = "common/events.rs"]
 mod events;
+use event_rig::{Device, EventRig};
 use events::{check_run, first_from};
 
 const SERVER: &str = env!("CARGO_BIN_EXE_vrpn_server");
@@ -48,10 +51,6 @@ fn want(sim: &SimulatedDevice<WandaSim>) -> Want {
     })
 }
 
-fn logged(sim: &SimulatedDevice<WandaSim>) -> usize {
-    sim.model(|m| m.sent().len())
-}
-
 #[test]
 fn wanda_through_vrpn_server_to_a_client() {
     let sim = SimulatedDevice::start("wanda", || {
@@ -62,119 +61,94 @@ fn wanda_through_vrpn_server_to_a_client() {
     .unwrap();
     // A byte every 8.3 ms at 1200 baud: a gap between records is longer than that.
     sim.set_junk_idle(Duration::from_millis(12));
-    let t0 = Now::read();
-    let line = format!("vrpn_Wanda Wanda0 {} 1200 60.0\n", sim.path().display());
-    let server = ServerProcess::start(SERVER.as_ref(), &line).unwrap();
-    let client = Client::connect(
+    let device = Device {
+        what: "Wanda",
+        unit: "report",
+        heard,
+        want,
+        skip_first: true,
+    };
+    let r = EventRig::start(
+        sim,
+        SERVER,
+        "vrpn_Wanda Wanda0 {PATH} 1200 60.0\n",
         "Wanda0",
-        server.port(),
         &[Interface::Analog, Interface::Button],
-    )
-    .unwrap();
-    let reports = |c: &Client| heard(c, 0).len();
+        device,
+    );
 
     // 1. Start-up and exact values.
-    client.wait_until(Duration::from_secs(10), "a first report", &server, |c| {
-        reports(c) >= 1
-    });
-    let startup = heard(&client, 0)[0].1.seconds_since(t0.wall);
-    eprintln!(
-        "Wanda: vrpn_server start to first report {:.0} ms",
-        startup * 1e3
-    );
-    client.wait_until(Duration::from_secs(10), "60 reports", &server, |c| {
-        reports(c) >= 60
-    });
-    let (w, at) = want(&sim);
-    check_run(&heard(&client, 0), &w, &at, 0, true, t0, "Wanda");
+    r.start_up("Wanda", 60);
 
     // 2. Garbage between records: reported, nothing lost.
     let junk: [&[u8]; 4] = [&[0x85, 0xFF], &[0x41], &[0xC3, 0x52, 0x90], &[0x7F, 0x45]];
-    sim.inject_between_records(&junk);
-    client.wait_until(Duration::from_secs(10), "the garbage sent", &server, |_| {
-        sim.injected() == junk.len()
-    });
-    let n = reports(&client);
-    client.wait_until(
-        Duration::from_secs(5),
-        "reports after garbage",
-        &server,
-        |c| reports(c) >= n + 30,
-    );
-    let (w, at) = want(&sim);
-    check_run(
-        &heard(&client, 0),
-        &w,
-        &at,
-        0,
-        true,
-        t0,
-        "Wanda after garbage",
-    );
-    client.wait_text(0, "skipped", Duration::from_secs(2), &server);
+    r.garbage(&junk, 30);
 
     // 3. Silence: the channels are centred once; then the records resume.
-    let (from, before) = (client.len(), logged(&sim));
-    sim.model(|m| m.mute = true);
-    client.pump_until(Duration::from_millis(800), |_| false);
-    let quiet = heard(&client, from);
+    let (from, before) = (r.client.len(), r.logged());
+    r.sim.model(|m| m.mute = true);
+    r.client.pump_until(Duration::from_millis(800), |_| false);
+    let quiet = heard(&r.client, from);
     assert!(
         quiet.iter().any(|r| r.0 == Report::Analog([0.0, 0.0])),
         "centred: {quiet:?}"
     );
-    sim.model(|m| m.mute = false);
-    client.wait_until(
+    r.sim.model(|m| m.mute = false);
+    r.client.wait_until(
         Duration::from_secs(5),
         "reports after silence",
-        &server,
+        &r.server,
         |c| heard(c, from).len() >= quiet.len() + 30,
     );
-    let (w, at) = want(&sim);
+    let (w, at) = want(&r.sim);
     let after = first_from(&w, before.saturating_sub(10));
     check_run(
-        &heard(&client, from),
+        &heard(&r.client, from),
         &w,
         &at,
         after,
         false,
-        t0,
+        r.t0,
         "Wanda after silence",
     );
 
     // 4. Unplugged: reported, nothing while unplugged, reopened when back, resumed.
-    let (from, before) = (client.len(), logged(&sim));
-    sim.unplug();
-    client.wait_text(from, "failed", Duration::from_secs(3), &server);
-    let while_unplugged = heard(&client, from).len();
-    client.pump_until(Duration::from_millis(500), |_| false);
+    let (from, before) = (r.client.len(), r.logged());
+    r.sim.unplug();
+    r.client
+        .wait_text(from, "failed", Duration::from_secs(3), &r.server);
+    let while_unplugged = heard(&r.client, from).len();
+    r.client.pump_until(Duration::from_millis(500), |_| false);
     assert_eq!(
-        heard(&client, from).len(),
+        heard(&r.client, from).len(),
         while_unplugged,
         "reports while unplugged"
     );
-    sim.plug().unwrap();
-    client.wait_until(
+    r.sim.plug().unwrap();
+    r.client.wait_until(
         Duration::from_secs(6),
         "reports after plugging back",
-        &server,
+        &r.server,
         |c| heard(c, from).len() >= while_unplugged + 30,
     );
-    client.wait_text(from, "is open again", Duration::from_secs(1), &server);
-    let (w, at) = want(&sim);
+    r.client
+        .wait_text(from, "is open again", Duration::from_secs(1), &r.server);
+    let (w, at) = want(&r.sim);
     let after = first_from(&w, before);
-    let fresh = client
+    let fresh = r
+        .client
         .heard()
         .iter()
         .skip(from)
         .position(|h| matches!(h, Heard::Text { text, .. } if text.contains("is open again")))
         .unwrap();
     check_run(
-        &heard(&client, from + fresh),
+        &heard(&r.client, from + fresh),
         &w,
         &at,
         after,
         true,
-        t0,
+        r.t0,
         "Wanda after unplugging",
     );
 }

@@ -16,7 +16,8 @@
 //!   [`sample(k, station)`](sample), and [`Sample::expected`] is what a client must receive
 //!   for it, computed from the record's definition independently of the driver.
 //! * Bytes leave at the line's baud rate; with [`SimConfig::keep_log`] each binary record is
-//!   logged with the time its first byte left.
+//!   logged with the time its first byte was due and, once it has left, the step that handed
+//!   it to the line ([`SentRecord::written`]: a station's own, not its frame's).
 //! * Faults: [`LibertySim::inject`], [`SimConfig::whoami`] (a silent or wrong WhoAmI),
 //!   [`SimConfig::ignores_stop`].
 
@@ -25,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use super::record::{encode, METRES_PER_INCH, RECORD_LEN};
 use super::reset::{CTRL_V, CTRL_Y, DEFAULT_WHOAMI_LEN};
-use crate::sim::{DeviceModel, Simulator};
+use crate::sim::{DeviceModel, FirstByteLogged, FirstWrites, Simulator};
 use crate::time::Now;
 
 /// The simulator `vrpn_device_sim` runs as `liberty`.
@@ -172,10 +173,23 @@ pub fn sample(k: u64, station: u8, millis: u32, stylus: bool) -> Sample {
 /// A binary record put on the line.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SentRecord {
-    /// When its first byte left the tracker.
+    /// When its first byte was due to leave the tracker (the line's pacing).
     pub first_byte: Instant,
+    /// The `now` of the step that handed its first byte to the line (on a pseudo-terminal:
+    /// the time just before the write), once it has left.
+    pub written: Option<Now>,
     /// Its values.
     pub sample: Sample,
+    offset: u64,
+}
+
+impl FirstByteLogged for SentRecord {
+    fn first_offset(&self) -> u64 {
+        self.offset
+    }
+    fn set_written(&mut self, at: Now) {
+        self.written = Some(at);
+    }
 }
 
 /// The simulated tracker. See the module documentation.
@@ -190,6 +204,7 @@ pub struct LibertySim {
     zero: Option<Instant>,
     out: VecDeque<(Instant, u8)>,
     line_free: Option<Instant>,
+    writes: FirstWrites,
     pending: Vec<(Instant, Vec<u8>)>,
     rebooting_until: Option<Instant>,
     line: Vec<u8>,
@@ -212,6 +227,7 @@ impl LibertySim {
             zero: None,
             out: VecDeque::new(),
             line_free: None,
+            writes: FirstWrites::new(),
             pending: Vec::new(),
             rebooting_until: None,
             line: Vec::new(),
@@ -239,6 +255,7 @@ impl LibertySim {
     /// Forgets the log.
     pub fn clear_log(&mut self) {
         self.sent.clear();
+        self.writes.log_cleared();
     }
 
     /// Every command heard, in order (control bytes as `^V`, `^Y`; lines without CR).
@@ -256,13 +273,15 @@ impl LibertySim {
         self.queue_at(bytes, now);
     }
 
-    fn queue_at(&mut self, bytes: &[u8], at: Instant) -> Instant {
+    /// Queues `bytes` to leave from `at` on (after what is queued already); returns when the
+    /// first is due and its offset in the output stream.
+    fn queue_at(&mut self, bytes: &[u8], at: Instant) -> (Instant, u64) {
         let start = self.line_free.map_or(at, |f| f.max(at));
         for (i, &b) in bytes.iter().enumerate() {
             self.out.push_back((start + self.cfg.byte_offset(i), b));
         }
         self.line_free = Some(start + self.cfg.byte_offset(bytes.len()));
-        start
+        (start, self.writes.queue(bytes.len()))
     }
 
     fn max_station(&self) -> usize {
@@ -304,12 +323,14 @@ impl LibertySim {
                 s.stylus,
                 &mut bytes,
             );
-            let first = self.queue_at(&bytes, at);
+            let (first, offset) = self.queue_at(&bytes, at);
             self.scratch = bytes;
             if self.cfg.keep_log {
                 self.sent.push(SentRecord {
                     first_byte: first,
+                    written: None,
                     sample: s,
+                    offset,
                 });
             }
         }
@@ -433,6 +454,7 @@ impl DeviceModel for LibertySim {
             self.frame(t);
             self.next_frame = Some(t + period);
         }
+        let before = out.len();
         while let Some(&(t, b)) = self.out.front() {
             if t > now.mono {
                 break;
@@ -440,6 +462,8 @@ impl DeviceModel for LibertySim {
             self.out.pop_front();
             out.push(b);
         }
+        self.writes
+            .hand(out.len() - before, Some(now), &mut self.sent);
     }
 
     fn next_deadline(&self) -> Option<Instant> {

@@ -17,13 +17,14 @@
 //!   [`sample(k, t)`](sample), or is missing when [`SimConfig::missing_every`] says so. A
 //!   `TX` reply's pose of a tool whose frame is new since the last reply is logged
 //!   ([`PolarisSim::sent`]) with the values a client must receive, computed from the digits
-//!   independently of the driver, and the time the reply's first byte left.
+//!   independently of the driver, the time the reply's first byte was due and, once it has
+//!   left, the step that handed it to the line ([`SentPose::written`]).
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use super::reply::with_crc;
-use crate::sim::DeviceModel;
+use crate::sim::{DeviceModel, FirstByteLogged, FirstWrites};
 use crate::time::Now;
 
 /// How the simulated tracker behaves.
@@ -92,12 +93,25 @@ pub fn expected(t: usize, q: [i32; 4], p: [i32; 3]) -> (usize, [f64; 3], [f64; 4
 /// A pose put on the line.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SentPose {
-    /// When the first byte of its reply left the tracker.
+    /// When the first byte of its reply was due to leave the tracker (the line's pacing).
     pub first_byte: Instant,
+    /// The `now` of the step that handed its reply's first byte to the line (on a
+    /// pseudo-terminal: the time just before the write), once it has left.
+    pub written: Option<Now>,
     /// Sensor, position (mm), quaternion (x, y, z, w).
     pub values: (usize, [f64; 3], [f64; 4]),
     /// Its frame number.
     pub frame: u64,
+    offset: u64,
+}
+
+impl FirstByteLogged for SentPose {
+    fn first_offset(&self) -> u64 {
+        self.offset
+    }
+    fn set_written(&mut self, at: Now) {
+        self.written = Some(at);
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -123,6 +137,7 @@ pub struct PolarisSim {
     pending: Vec<Pending>,
     out: VecDeque<(Instant, u8)>,
     line_free: Option<Instant>,
+    writes: FirstWrites,
     commands: Vec<String>,
     sent: Vec<SentPose>,
     started: bool,
@@ -142,6 +157,7 @@ impl PolarisSim {
             pending: Vec::new(),
             out: VecDeque::new(),
             line_free: None,
+            writes: FirstWrites::new(),
             commands: Vec::new(),
             sent: Vec::new(),
             started: false,
@@ -179,14 +195,16 @@ impl PolarisSim {
         )
     }
 
-    fn queue_at(&mut self, bytes: &[u8], at: Instant) -> Instant {
+    /// Queues `bytes` to leave from `at` on (after what is queued already); returns when the
+    /// first is due and its offset in the output stream.
+    fn queue_at(&mut self, bytes: &[u8], at: Instant) -> (Instant, u64) {
         let start = self.line_free.map_or(at, |f| f.max(at));
         let step = self.byte_time();
         for (i, &b) in bytes.iter().enumerate() {
             self.out.push_back((start + step * i as u32, b));
         }
         self.line_free = Some(start + step * bytes.len() as u32);
-        start
+        (start, self.writes.queue(bytes.len()))
     }
 
     fn reply(&mut self, body: &[u8], at: Instant) {
@@ -399,17 +417,20 @@ impl DeviceModel for PolarisSim {
         self.pending.sort_by_key(|p| p.0);
         while self.pending.first().is_some_and(|p| p.0 <= now.mono) {
             let (t, bytes, poses) = self.pending.remove(0);
-            let first = self.queue_at(&bytes, t);
+            let (first, offset) = self.queue_at(&bytes, t);
             if self.cfg.keep_log {
                 for (tool, q, p, frame) in poses {
                     self.sent.push(SentPose {
                         first_byte: first,
+                        written: None,
                         values: expected(tool, q, p),
                         frame,
+                        offset,
                     });
                 }
             }
         }
+        let before = out.len();
         while let Some(&(t, b)) = self.out.front() {
             if t > now.mono {
                 break;
@@ -422,6 +443,8 @@ impl DeviceModel for PolarisSim {
                 b ^ 0x5A
             });
         }
+        self.writes
+            .hand(out.len() - before, Some(now), &mut self.sent);
     }
 
     fn next_deadline(&self) -> Option<Instant> {

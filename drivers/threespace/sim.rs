@@ -16,7 +16,8 @@
 //!   receive for it, computed here from the record's definition, independently of the driver.
 //!   In ASCII mode the output is a text line per record (which a binary reader must skip).
 //! * Bytes leave at the line's baud rate; with [`SimConfig::keep_log`] each binary record is
-//!   logged with the time its first byte left ([`ThreeSpaceSim::sent`]).
+//!   logged with the time its first byte was due and, once it has left, the step that handed
+//!   it to the line ([`ThreeSpaceSim::sent`], [`SentRecord::written`]).
 //! * Faults: [`ThreeSpaceSim::inject`] puts bytes on the line, [`SimConfig::status_reply`]
 //!   breaks the status answer, [`SimConfig::ignores_stop`] keeps streaming through `c`.
 
@@ -25,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use super::record::{data, pack, Model, RECORD_LEN};
 use super::reset::{status_len, CTRL_K, CTRL_Y};
-use crate::sim::{DeviceModel, Simulator};
+use crate::sim::{DeviceModel, FirstByteLogged, FirstWrites, Simulator};
 use crate::time::Now;
 
 /// The simulator `vrpn_device_sim` runs as `threespace`.
@@ -208,10 +209,23 @@ pub fn sample(model: Model, k: u64, station: u8) -> Sample {
 /// A binary record put on the line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SentRecord {
-    /// When its first byte left the tracker.
+    /// When its first byte was due to leave the tracker (the line's pacing).
     pub first_byte: Instant,
+    /// The `now` of the step that handed its first byte to the line (on a pseudo-terminal:
+    /// the time just before the write), once it has left.
+    pub written: Option<Now>,
     /// Its values.
     pub sample: Sample,
+    offset: u64,
+}
+
+impl FirstByteLogged for SentRecord {
+    fn first_offset(&self) -> u64 {
+        self.offset
+    }
+    fn set_written(&mut self, at: Now) {
+        self.written = Some(at);
+    }
 }
 
 /// The simulated tracker. See the module documentation.
@@ -224,6 +238,7 @@ pub struct ThreeSpaceSim {
     count: u64,
     out: VecDeque<(Instant, u8)>,
     line_free: Option<Instant>,
+    writes: FirstWrites,
     pending_status: Option<Instant>,
     rebooting_until: Option<Instant>,
     line: Vec<u8>,
@@ -247,6 +262,7 @@ impl ThreeSpaceSim {
             count: 0,
             out: VecDeque::new(),
             line_free: None,
+            writes: FirstWrites::new(),
             pending_status: None,
             rebooting_until: None,
             line: Vec::new(),
@@ -276,6 +292,7 @@ impl ThreeSpaceSim {
     /// Forgets the log.
     pub fn clear_log(&mut self) {
         self.sent.clear();
+        self.writes.log_cleared();
     }
 
     /// Every byte the host wrote.
@@ -309,13 +326,15 @@ impl ThreeSpaceSim {
         self.queue(bytes, now);
     }
 
-    fn queue(&mut self, bytes: &[u8], at: Instant) -> Instant {
+    /// Queues `bytes` to leave from `at` on (after what is queued already); returns when the
+    /// first is due and its offset in the output stream.
+    fn queue(&mut self, bytes: &[u8], at: Instant) -> (Instant, u64) {
         let start = self.line_free.map_or(at, |f| f.max(at));
         for (i, &b) in bytes.iter().enumerate() {
             self.out.push_back((start + self.cfg.byte_offset(i), b));
         }
         self.line_free = Some(start + self.cfg.byte_offset(bytes.len()));
-        start
+        (start, self.writes.queue(bytes.len()))
     }
 
     fn make_record(&mut self, at: Instant) {
@@ -334,11 +353,13 @@ impl ThreeSpaceSim {
             self.queue(text.as_bytes(), at);
             return;
         }
-        let first = self.queue(&s.bytes(), at);
+        let (first, offset) = self.queue(&s.bytes(), at);
         if self.cfg.keep_log {
             self.sent.push(SentRecord {
                 first_byte: first,
+                written: None,
                 sample: s,
+                offset,
             });
         }
     }
@@ -448,15 +469,19 @@ impl DeviceModel for ThreeSpaceSim {
             self.make_record(t);
             self.next_record = Some(t + self.cfg.period);
         }
+        let mut left = 0;
         while let Some(&(t, b)) = self.out.front() {
             if t > now.mono {
                 break;
             }
             self.out.pop_front();
+            left += 1;
             if !self.mute {
                 out.push(b);
             }
         }
+        let handed = (!self.mute).then_some(now);
+        self.writes.hand(left, handed, &mut self.sent);
     }
 
     fn next_deadline(&self) -> Option<Instant> {

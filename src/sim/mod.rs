@@ -10,6 +10,8 @@
 //!   and unplugging on demand.
 //! * [`Simulator`]: a simulator as the `vrpn_device_sim` program runs it (each driver's
 //!   `sim.rs` exports one; the list is `crate::drivers::SIMULATORS`).
+//! * [`FirstWrites`]: stamps a paced simulator's logged records with the step that hands
+//!   their first byte to the line (for first-byte timing measurements).
 //! * [`rig`]: a `vrpn_server` child process on a configuration line and a TCP client that
 //!   records everything it receives, for the end-to-end tests every driver has (exact values
 //!   through a real server to a real client, garbage, silence, unplugging).
@@ -19,12 +21,14 @@
 #[cfg(test)]
 pub(crate) mod analog_rig;
 mod catalog;
+mod first_write;
 mod line;
 mod pty;
 pub mod rig;
 mod thread;
 
 pub use catalog::Simulator;
+pub use first_write::{FirstByteLogged, FirstWrites};
 pub use line::{DeviceModel, Rng, VirtualLine, VirtualLines};
 pub use pty::{PtyDevice, Written};
 pub use thread::{Noisy, SimulatedDevice};

@@ -24,6 +24,8 @@ pub type Want<T> = (Vec<(T, Option<usize>)>, Vec<Instant>);
 pub struct Device<M: DeviceModel + 'static, T> {
     /// The device's name in the checks' messages.
     pub what: &'static str,
+    /// What one report is called in the waits' messages ("report", "change").
+    pub unit: &'static str,
     /// The reports the client heard from its log index `from` on, with their stamps.
     pub heard: fn(&Client, usize) -> Vec<(T, TimeVal)>,
     /// What the simulator's log implies.
@@ -91,9 +93,10 @@ impl<M: DeviceModel + 'static, T: PartialEq + Debug + Clone> EventRig<M, T> {
     /// Start-up: waits for a first report (printing the time from the server's start to it,
     /// as `kind`), then for `n` reports, and checks them all.
     pub fn start_up(&self, kind: &str, n: usize) {
+        let unit = self.device.unit;
         self.client.wait_until(
             Duration::from_secs(10),
-            "a first report",
+            &format!("a first {unit}"),
             &self.server,
             |_| self.count(0) >= 1,
         );
@@ -104,7 +107,7 @@ impl<M: DeviceModel + 'static, T: PartialEq + Debug + Clone> EventRig<M, T> {
         );
         self.client.wait_until(
             Duration::from_secs(10),
-            &format!("{n} reports"),
+            &format!("{n} {unit}s"),
             &self.server,
             |_| self.count(0) >= n,
         );
@@ -124,7 +127,7 @@ impl<M: DeviceModel + 'static, T: PartialEq + Debug + Clone> EventRig<M, T> {
         let n = self.count(0);
         self.client.wait_until(
             Duration::from_secs(5),
-            "reports after garbage",
+            &format!("{}s after garbage", self.device.unit),
             &self.server,
             |_| self.count(0) >= n + more,
         );

@@ -10,6 +10,7 @@ use std::rc::Rc;
 use std::time::Duration;
 
 use vrpn::driver::{Lifecycle, Protocol};
+use vrpn::serial::SerialDriver;
 use vrpn::sim::{DeviceModel, VirtualLine};
 use vrpn::{AnalogRemote, ButtonRemote, Connection};
 
@@ -135,4 +136,43 @@ pub fn stream_steps<P: Protocol, M: DeviceModel>(
     }
     let skipped = line.driver.0.stats().skipped_bytes;
     (reports.get() - before, COUNT.with(Cell::get), skipped)
+}
+
+/// A callback that adds one to `n` for each report it is given.
+pub fn bump<T>(n: &Rc<Cell<u64>>) -> impl FnMut(&T) + 'static {
+    let n = n.clone();
+    move |_| n.set(n.get() + 1)
+}
+
+/// Streams 5 s with `noise` on the line once a second, after a warm-up of 3.5 s with the
+/// same noise; returns (allocations, reports) of the counted part.
+pub fn stream_after_warm_up<D: SerialDriver, M: DeviceModel>(
+    line: &mut VirtualLine<Counted<D>, M>,
+    reports: &Cell<u64>,
+    noise: &[u8],
+) -> (u64, u64) {
+    line.split_reads = true;
+    line.run_for(Duration::from_secs(2));
+    line.inject(noise);
+    line.run_for(Duration::from_millis(1500));
+    COUNT.with(|c| c.set(0));
+    let before = reports.get();
+    for _ in 0..5 {
+        line.run_for(Duration::from_secs(1));
+        line.inject(noise);
+    }
+    (COUNT.with(Cell::get), reports.get() - before)
+}
+
+/// The checks after [`stream_after_warm_up`]: at least `least` reports, at least `skipped`
+/// bytes of the noise skipped, and no allocation.
+pub fn assert_streamed_skipping<P: Protocol, M: DeviceModel>(
+    line: &Line<P, M>,
+    (allocations, reports): (u64, u64),
+    least: u64,
+    skipped: u64,
+) {
+    assert!(reports >= least, "{reports} reports");
+    assert!(line.driver.0.stats().skipped_bytes >= skipped);
+    assert_eq!(allocations, 0, "allocations while streaming");
 }
