@@ -1,7 +1,8 @@
-//! The system calls mio does not offer: receiving several datagrams, with their sources,
-//! in one call (`recvmmsg`), sending datagrams to many destinations in one call
-//! (`sendmmsg`), and asking how many bytes wait on a descriptor (`FIONREAD`). The crate's only `unsafe` code outside the programs' signal handlers, the C and
-//! Python bindings and the drivers' device ioctls lives here.
+//! The system calls mio does not offer: receiving several datagrams, with their sources, in
+//! one call (`recvmmsg`), sending datagrams to many destinations in one call (`sendmmsg`), and
+//! asking how many bytes wait on a descriptor (`FIONREAD`). The crate's only `unsafe` code
+//! outside the programs' signal handlers, the C and Python bindings and the drivers' device
+//! ioctls lives here.
 #![allow(unsafe_code)]
 
 use std::io;
