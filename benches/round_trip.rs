@@ -280,6 +280,15 @@ impl VrpnPair {
             echo: (c_echo, c_from),
             answered,
         };
+        // Unreliable messages keep to TCP for a while after the descriptions
+        // (`Limits::udp_after_descriptions`): let that pass, then warm up.
+        let udp_open = std::time::Instant::now()
+            + Limits::default().udp_after_descriptions
+            + Duration::from_millis(20);
+        while std::time::Instant::now() < udp_open {
+            pair.client.mainloop().unwrap();
+            pair.server.mainloop().unwrap();
+        }
         // Let both sides learn each other's names and UDP ports.
         for _ in 0..200 {
             pair.round_trip(pair.ping, class::RELIABLE);

@@ -206,7 +206,11 @@ impl Vrpn {
         remote.on_pose(move |_| p.set(p.get() + 1));
         // Connect, let the ping cycle finish and the UDP channel come up.
         let warm = Instant::now();
-        while poses.get() < 1000 || remote.ping_cycle().waiting_for_pong() {
+        // Unreliable reports keep to TCP for Limits::udp_after_descriptions after the
+        // handshake: warm up past that.
+        let hold = vrpn::Limits::default().udp_after_descriptions + Duration::from_millis(50);
+        while poses.get() < 1000 || remote.ping_cycle().waiting_for_pong() || warm.elapsed() < hold
+        {
             assert!(warm.elapsed() < Duration::from_secs(10), "warm-up stalled");
             tracker.report_pose(0, TimeVal::now(), POS, QUAT).unwrap();
             server.mainloop().unwrap();

@@ -5,67 +5,17 @@
 //! end-to-end test is `tests/driver_dyna.rs`.)
 
 mod common;
+#[path = "common/pty_sim.rs"]
+mod pty_sim;
 
 use std::cell::RefCell;
-use std::path::PathBuf;
 use std::rc::Rc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use pty_sim::Simulated;
 use vrpn::drivers::joylin::event::Kind;
 use vrpn::drivers::joylin::sim::{JoystickSim, SimConfig as JoySimConfig};
-use vrpn::sim::DeviceModel;
-use vrpn::sim::PtyDevice;
 use vrpn::{AnalogRemote, ButtonRemote, Now, TextReceiver, TimeVal, TrackerPose, TrackerRemote};
-
-/// Runs a device model on a pseudo-terminal in a thread until dropped.
-struct Simulated<M: DeviceModel + Send + 'static> {
-    device: Arc<Mutex<PtyDevice<M>>>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
-    path: PathBuf,
-}
-
-impl<M: DeviceModel + Send + 'static> Simulated<M> {
-    fn start(model: M, name: &str) -> Simulated<M> {
-        let dir = std::env::temp_dir().join(format!("vrpn-pty-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("tty");
-        let device = Arc::new(Mutex::new(PtyDevice::open(model, &path).unwrap()));
-        let stop = Arc::new(AtomicBool::new(false));
-        let (d, s) = (device.clone(), stop.clone());
-        let thread = std::thread::spawn(move || {
-            while !s.load(Ordering::Relaxed) {
-                let _ = d.lock().unwrap().step(Now::read());
-                std::thread::sleep(Duration::from_micros(200));
-            }
-        });
-        Simulated {
-            device,
-            stop,
-            thread: Some(thread),
-            path,
-        }
-    }
-
-    fn lock(&self) -> MutexGuard<'_, PtyDevice<M>> {
-        self.device.lock().unwrap()
-    }
-}
-
-impl<M: DeviceModel + Send + 'static> Drop for Simulated<M> {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-        if let Some(dir) = self.path.parent() {
-            let _ = std::fs::remove_dir_all(dir);
-        }
-    }
-}
 
 /// Runs `pump` until `done` or `max`; returns whether `done` held.
 fn pump_until(pump: &dyn Fn(), max: Duration, done: &dyn Fn() -> bool) -> bool {

@@ -130,6 +130,14 @@ fn own_udp_ports() -> Vec<u16> {
 fn junk_datagrams_to_a_client_are_dropped_before_they_reach_it() {
     let server = start_server(CFG, 0);
     let c = client(server.port, false);
+    until_more(&[&c], 50, "first poses");
+    // Reports come by UDP once Limits::udp_after_descriptions has passed (or sooner, once the
+    // client has answered a clock query), and the client's UDP socket takes only the server's
+    // datagrams from the first one on: the junk must come after that.
+    let hold = Instant::now();
+    while hold.elapsed() < Limits::default().udp_after_descriptions {
+        until_more(&[&c], 1, "poses during the hold");
+    }
     until_more(&[&c], 50, "first poses over UDP");
     let ports = own_udp_ports();
     assert!(!ports.is_empty(), "no UDP socket found for the client");

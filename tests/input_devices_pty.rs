@@ -5,80 +5,23 @@
 //! device is reopened when it comes back.
 
 mod common;
+#[path = "common/pty_sim.rs"]
+mod pty_sim;
 
 use std::cell::RefCell;
 use std::fmt::Debug;
-use std::path::PathBuf;
 use std::rc::Rc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+use pty_sim::Simulated;
 use vrpn::devices::base::TEXT_MESSAGE;
 use vrpn::devices::text::decode_text;
 use vrpn::drivers::cerealbox::record::revolutions;
 use vrpn::drivers::cerealbox::sim::{self as cereal, CerealSim};
 use vrpn::drivers::magellan::record::{axis_value, RESET_NULL_RADIUS};
 use vrpn::drivers::magellan::sim::{self as magellan, MagellanSim, Sent};
-use vrpn::sim::DeviceModel;
-use vrpn::sim::PtyDevice;
-use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote, Now, SenderFilter};
-
-/// Runs a device model on a pseudo-terminal in a thread until dropped.
-struct Simulated<M: DeviceModel + Send + 'static> {
-    device: Arc<Mutex<PtyDevice<M>>>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
-    path: PathBuf,
-}
-
-impl<M: DeviceModel + Send + 'static> Simulated<M> {
-    fn start(model: M, name: &str) -> Simulated<M> {
-        let dir = std::env::temp_dir().join(format!("vrpn-pty-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("tty");
-        let device = Arc::new(Mutex::new(PtyDevice::open(model, &path).unwrap()));
-        let stop = Arc::new(AtomicBool::new(false));
-        let (d, s) = (device.clone(), stop.clone());
-        let thread = std::thread::spawn(move || {
-            while !s.load(Ordering::Relaxed) {
-                let _ = d.lock().unwrap().step(Now::read());
-                std::thread::sleep(Duration::from_micros(200));
-            }
-        });
-        Simulated {
-            device,
-            stop,
-            thread: Some(thread),
-            path,
-        }
-    }
-
-    /// Runs `f` on the model with the current time.
-    fn with<R>(&self, f: impl FnOnce(&mut M, Now) -> R) -> R {
-        f(&mut self.device.lock().unwrap().model, Now::read())
-    }
-
-    /// Unplugs the simulated device (the server's port fails) or plugs it back.
-    fn set_plugged(&self, plugged: bool) {
-        let mut d = self.device.lock().unwrap();
-        if plugged {
-            d.plug().unwrap();
-        } else {
-            d.unplug();
-        }
-    }
-}
-
-impl<M: DeviceModel + Send + 'static> Drop for Simulated<M> {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
-}
+use vrpn::{AnalogRemote, ButtonRemote, Connection, DialRemote, SenderFilter};
 
 type Shared<T> = Rc<RefCell<Vec<T>>>;
 

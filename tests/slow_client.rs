@@ -69,6 +69,16 @@ fn stalled_client_sheds_unreliable_then_is_dropped() {
     let flood = server.register_sender("Flood").unwrap();
     let ft = server.register_type("flood").unwrap();
     let payload = [0u8; 1000];
+    // New names keep the good client's unreliable messages on TCP for
+    // Limits::udp_after_descriptions (or until it answers a clock query sent in that time):
+    // the flood starts after that, so that it goes to the good client by UDP and only the
+    // stalled peer's TCP backlog grows.
+    let described = Instant::now();
+    while described.elapsed() < Limits::default().udp_after_descriptions + Duration::from_millis(20)
+    {
+        step();
+        std::thread::sleep(Duration::from_micros(200));
+    }
 
     // 1. Unreliable flood, far more than the limit: shed, never dropped for it. The kernel
     // absorbs megabytes first (loopback receive buffers autotune up to net.ipv4.tcp_rmem's

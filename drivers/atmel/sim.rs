@@ -126,6 +126,12 @@ impl AtmelSim {
         &self.writes
     }
 
+    /// Changes the time from a request to its answer (a board, or a simulator's thread,
+    /// held up).
+    pub fn set_reply_delay(&mut self, delay: Duration) {
+        self.cfg.reply_delay = delay;
+    }
+
     /// Register `r`'s value.
     pub fn register(&self, r: usize) -> u8 {
         self.registers[r]

@@ -204,6 +204,32 @@ fn a_slow_reader_loses_nothing() {
 }
 
 #[test]
+fn an_answer_later_than_the_wait_is_a_failed_read_and_is_not_taken_for_the_next() {
+    // A loaded machine can hold the board's answer past REPLY_WAIT: that read reports -21
+    // (as C++), the late answer is not taken for another read, and the values go on exact.
+    let mut r = rig(LINES, 8);
+    r.line.run_for(Duration::from_millis(300));
+    let n = r.reports().len();
+    r.line
+        .device
+        .set_reply_delay(super::REPLY_WAIT + Duration::from_millis(40));
+    r.line.run_for(Duration::from_millis(170));
+    r.line.device.set_reply_delay(Duration::from_millis(1));
+    r.line.run_for(Duration::from_secs(1));
+    let reports = r.reports();
+    let failed: Vec<usize> = (n..reports.len())
+        .filter(|&i| reports[i].0[..3].contains(&reported::READ_FAILED))
+        .collect();
+    assert!(!failed.is_empty() && failed.len() <= 2, "{failed:?}");
+    let after = failed[failed.len() - 1] + 1;
+    for reg in [0, 1] {
+        r.assert_channel_is_answers(reg, after, reg == 0);
+    }
+    assert!(reports[after..].iter().all(|(c, _)| c[2] == 2.0));
+    assert!(reports[..n].iter().all(|(c, _)| c[0] >= 0.0 && c[2] == 2.0));
+}
+
+#[test]
 fn garbage_between_answers_is_skipped() {
     let mut r = rig(LINES, 3);
     r.line.run_for(Duration::from_millis(300));

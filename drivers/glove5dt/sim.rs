@@ -28,7 +28,8 @@ pub static SIMULATOR: Simulator = Simulator {
     name: "glove5dt",
     about: "5DT Data Glove 5: answers the reset and information requests, then streams (or answers polls with) known finger values",
     baud: 19200,
-    line: "vrpn_5dt Glove0 {PATH} {BAUD} 2 1",
+    // C++'s documented wired line: polled, nine-byte records (what this simulator sends).
+    line: "vrpn_5dt Glove0 {PATH} {BAUD} 1 0",
     make: |baud| Box::new(GloveSim::new(SimConfig::new(baud))),
 };
 

@@ -80,6 +80,21 @@ fn streaming_ten_byte_glove() {
 }
 
 #[test]
+fn the_simulator_of_vrpn_device_sim_sends_the_records_its_line_asks_for() {
+    // A driver that reads records of a fixed length (C++'s) cannot keep step with records
+    // of another length: the line `vrpn_device_sim glove5dt` prints must say the length its
+    // simulator sends, and C++ starts on it (a line asking for ten-byte records of this
+    // nine-byte simulator kept C++ resetting).
+    let sim = &super::sim::SIMULATOR;
+    let cfg: Glove5dt = parse_one(&format!("{}\n", sim.config_line("/dev/ttyS0", sim.baud)));
+    assert_eq!(cfg.ten_bytes, SimConfig::new(sim.baud).ten_bytes);
+    assert_eq!((cfg.mode, cfg.baud), (Mode::Polled, 19200));
+    let mut r = rig(&format!("{}\n", sim.config_line("1", sim.baud)), 9);
+    r.run_until_reports(50, Duration::from_secs(2));
+    r.check(0, 0);
+}
+
+#[test]
 fn wireless_glove_is_only_listened_to() {
     // 9600 baud: wireless, streaming ten-byte records whatever the line says.
     let mut r = rig("vrpn_5dt glove 1 9600 1 0\n", 3);

@@ -95,7 +95,8 @@ impl TxBuffer {
 
 /// Datagrams waiting to go out on UDP: the one being filled plus a ring of full ones. When the
 /// ring is full the oldest datagram is dropped: unreliable traffic is what gives way first.
-/// The ring is allocated with the first message (peers on the TCP-only path never need it).
+/// The ring is allocated when the peer's UDP channel opens ([`DatagramQueue::allocate`]), so
+/// the first datagram allocates nothing; peers on the TCP-only path never need it.
 #[derive(Debug, Default)]
 pub(crate) struct DatagramQueue {
     slots: Vec<u8>,
@@ -142,10 +143,7 @@ impl DatagramQueue {
         if size > MAX_UDP_DATAGRAM {
             return None;
         }
-        if self.slots.is_empty() {
-            self.slots = vec![0; DATAGRAM_SLOTS * MAX_UDP_DATAGRAM];
-            self.lens = vec![0; DATAGRAM_SLOTS];
-        }
+        self.allocate();
         // The last slot is "open" while it has room; otherwise open a new one.
         let need_new = self.count == 0 || self.lens[self.tail_slot()] + size > MAX_UDP_DATAGRAM;
         if need_new {
@@ -162,6 +160,16 @@ impl DatagramQueue {
         let start = t * MAX_UDP_DATAGRAM + self.lens[t];
         self.lens[t] += size;
         Some(&mut self.slots[start..start + size])
+    }
+
+    /// Allocates the ring, once. Called when the peer's UDP channel opens: unreliable
+    /// messages may keep to TCP for a while after that (`Limits::udp_after_descriptions`), and
+    /// the first datagram must not allocate in what is by then the steady state.
+    pub(crate) fn allocate(&mut self) {
+        if self.slots.is_empty() {
+            self.slots = vec![0; DATAGRAM_SLOTS * MAX_UDP_DATAGRAM];
+            self.lens = vec![0; DATAGRAM_SLOTS];
+        }
     }
 
     /// No datagram waits.

@@ -2,7 +2,7 @@
 //! here, and the deadline it must meet.
 
 use std::net::SocketAddrV4;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::buffers::{Backlogged, DatagramInbox, DatagramQueue, TxBuffer};
 use super::names::IdSet;
@@ -125,6 +125,13 @@ pub(crate) struct Endpoint {
     pub(crate) phase: Phase,
     /// The peer announced a UDP port and our outbound socket is connected to it.
     pub(crate) udp_ready: bool,
+    /// Unreliable messages keep to TCP until then: the peer may not have read the
+    /// descriptions sent just before (`Limits::udp_after_descriptions`).
+    pub(crate) udp_held_until: Option<Instant>,
+    /// The id of a clock query sent to the peer since the hold was last set: it went by TCP,
+    /// behind the descriptions, so the peer's reply shows it has read them and ends the hold
+    /// early (a peer of this crate; C++ never answers, and keeps the timed hold).
+    pub(crate) udp_hold_probe: Option<u32>,
     /// No UDP channel in either direction (TCP-only path).
     pub(crate) tcp_only: bool,
     /// The peer has described a type: its own sender table is complete (C++ describes every
@@ -203,6 +210,8 @@ impl Endpoint {
             tx: TxBuffer::new(1024, tx_limit),
             udp_tx: DatagramQueue::default(),
             udp_ready: false,
+            udp_held_until: None,
+            udp_hold_probe: None,
             senders: RemoteNames::default(),
             types: RemoteNames::default(),
             seq_tcp: 0,
@@ -344,7 +353,7 @@ impl Endpoint {
         if reliable {
             return Channel::Tcp;
         }
-        if self.udp_ready && wire_size <= MAX_UDP_DATAGRAM {
+        if self.udp_ready && self.udp_held_until.is_none() && wire_size <= MAX_UDP_DATAGRAM {
             return Channel::Udp;
         }
         if self.tx.pending_len() > self.tx.limit / 2 {
@@ -354,6 +363,39 @@ impl Endpoint {
             return Channel::Discarded;
         }
         Channel::Tcp
+    }
+
+    /// Keeps unreliable messages on TCP for `hold` from `now` (see `udp_held_until`).
+    pub(crate) fn hold_udp(&mut self, now: Instant, hold: Duration) {
+        if self.udp_ready && !hold.is_zero() {
+            let until = now + hold;
+            self.udp_held_until = Some(self.udp_held_until.map_or(until, |t| t.max(until)));
+            // A query sent before these descriptions shows nothing about them.
+            self.udp_hold_probe = None;
+        }
+    }
+
+    /// A clock query `id` is being sent: while unreliable messages are held it goes by TCP
+    /// behind the descriptions, and the first such one becomes the probe.
+    pub(crate) fn note_clock_query(&mut self, id: u32) {
+        if self.udp_held_until.is_some() && self.udp_hold_probe.is_none() {
+            self.udp_hold_probe = Some(id);
+        }
+    }
+
+    /// The peer answered clock query `id`: if that is the probe or a later query, it has read
+    /// every description sent before the probe, and the hold ends. Returns whether it did.
+    pub(crate) fn note_clock_reply(&mut self, id: u32) -> bool {
+        let Some(probe) = self.udp_hold_probe else {
+            return false;
+        };
+        // Query ids count up (wrapping) on a connection; an older id proves nothing.
+        if id.wrapping_sub(probe) > u32::MAX / 2 {
+            return false;
+        }
+        self.udp_held_until = None;
+        self.udp_hold_probe = None;
+        true
     }
 
     #[inline]

@@ -127,6 +127,15 @@ pub struct Limits {
     /// of this crate it makes remote timestamps comparable to the local clock; a C++ peer
     /// never answers, so nothing changes there (it gets one small query a minute).
     pub clock_sync: Option<clock::ClockSyncConfig>,
+    /// After a peer's UDP channel opens, and after new names are described to it, its
+    /// unreliable messages keep to TCP for this long. A C++ 07.x peer reads its UDP socket
+    /// before its TCP stream in each pass and drops, without a word, a message whose type
+    /// it has not been told yet, so a report sent by UDP right behind the descriptions sent
+    /// by TCP can overtake them and be lost (a C++ client missed the answer to the ping it
+    /// sent on connecting). A peer that answers a clock query sent during the hold (a peer of
+    /// this crate, with `clock_sync` on) has shown it read the descriptions, and the hold ends
+    /// at once. Zero sends by UDP at once.
+    pub udp_after_descriptions: Duration,
 }
 
 impl Default for Limits {
@@ -146,6 +155,7 @@ impl Default for Limits {
             max_pending_callbacks: 255,
             callback_to_named_address: false,
             clock_sync: Some(clock::ClockSyncConfig::default()),
+            udp_after_descriptions: Duration::from_millis(250),
         }
     }
 }

@@ -133,6 +133,8 @@ pub struct Pair {
     pub datagrams_sent: usize,
     /// Datagrams delivered (after loss and duplication).
     pub datagrams_delivered: usize,
+    /// Every datagram carried: who sent it, and its bytes.
+    pub datagram_log: Vec<(Who, Vec<u8>)>,
 }
 
 fn start() -> Now {
@@ -180,6 +182,7 @@ impl Pair {
             connections: 0,
             datagrams_sent: 0,
             datagrams_delivered: 0,
+            datagram_log: Vec::new(),
         }
     }
 
@@ -703,6 +706,7 @@ impl Pair {
                 continue;
             }
             self.datagrams_sent += 1;
+            self.datagram_log.push((who, dg.clone()));
             if self.chance(self.faults.udp_loss) {
                 continue;
             }

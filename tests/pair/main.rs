@@ -20,7 +20,13 @@ fn limits() -> Limits {
 
 #[test]
 fn handshake_over_the_udp_path_opens_both_channels() {
-    let mut p = Pair::new(false, limits(), 1);
+    // Without clock sync, like a C++ peer (which never answers a clock query): the hold after
+    // the descriptions runs its whole time.
+    let no_clock = Limits {
+        clock_sync: None,
+        ..limits()
+    };
+    let mut p = Pair::new(false, no_clock, 1);
     p.faults.latency = Duration::from_micros(200);
     let start = p.now.mono;
     assert!(p.run_until(secs(1.0), Pair::connected));
@@ -48,9 +54,22 @@ fn handshake_over_the_udp_path_opens_both_channels() {
         assert_eq!(p.events(who, ConnectionEvent::GotFirstConnection).len(), 1);
         assert_eq!(p.events(who, ConnectionEvent::GotConnection).len(), 1);
     }
-    // LOW_LATENCY goes over UDP, RELIABLE over TCP, and both arrive.
+    // Right after the handshake LOW_LATENCY keeps to TCP (the client may not have read the
+    // descriptions yet: a C++ peer reads UDP first and drops messages of types it does not
+    // know); once Limits::udp_after_descriptions has passed it goes over UDP. RELIABLE is
+    // always TCP, and everything arrives.
     let sent_before = p.datagrams_sent;
-    for i in 0..10u8 {
+    for i in 0..5u8 {
+        p.send(Who::Server, REPORT, &[i; 16], class::LOW_LATENCY);
+    }
+    p.run_for(secs(0.01));
+    assert_eq!(
+        p.datagrams_sent, sent_before,
+        "reports went by UDP right behind the descriptions"
+    );
+    p.run_for(limits().udp_after_descriptions);
+    let sent_before = p.datagrams_sent;
+    for i in 5..10u8 {
         p.send(Who::Server, REPORT, &[i; 16], class::LOW_LATENCY);
     }
     p.send(Who::Server, TEXT, b"reliable", class::RELIABLE);
@@ -69,6 +88,56 @@ fn handshake_over_the_udp_path_opens_both_channels() {
         .collect();
     assert_eq!(reports, (0..10u8).map(|i| vec![i; 16]).collect::<Vec<_>>());
     assert_eq!(p.received(Who::Client, TEXT).len(), 1);
+}
+
+/// Two peers of this crate (clock sync on): a clock query sent during the hold goes by TCP
+/// behind the descriptions, and its answer shows the peer has read them, so unreliable
+/// messages take UDP long before `Limits::udp_after_descriptions` has passed.
+#[test]
+fn a_clock_reply_ends_the_hold_after_the_descriptions_early() {
+    let mut p = Pair::new(false, limits(), 11);
+    p.faults.latency = Duration::from_micros(200);
+    assert!(p.run_until(secs(1.0), Pair::connected));
+    let connected = p.now.mono;
+    // One report every 2 ms until one goes out in a datagram. A clock query leaves at most a
+    // quick-round spacing (20 ms) after the hold began and is answered within a round trip.
+    let mut first_by_udp = None;
+    for i in 0..100u8 {
+        let payload = [0x80 | i; 16];
+        p.send(Who::Server, REPORT, &payload, class::LOW_LATENCY);
+        p.run_for(secs(0.002));
+        let by_udp = p
+            .datagram_log
+            .iter()
+            .any(|(who, dg)| *who == Who::Server && dg.windows(16).any(|w| w == payload));
+        if by_udp {
+            first_by_udp = Some((i, p.now.mono - connected));
+            break;
+        }
+    }
+    let (n, after) = first_by_udp.expect("every report kept to TCP");
+    assert!(
+        n > 0,
+        "the first report went by UDP right behind the descriptions"
+    );
+    assert!(
+        after < Duration::from_millis(60),
+        "reports took UDP only after {after:?} (the timed hold is {:?})",
+        limits().udp_after_descriptions
+    );
+    // Nothing lost or reordered by the change of channel.
+    let reports: Vec<Vec<u8>> = p
+        .received(Who::Client, REPORT)
+        .into_iter()
+        .map(|s| match s {
+            Seen::Message { payload, .. } => payload.clone(),
+            _ => unreachable!(),
+        })
+        .collect();
+    assert_eq!(
+        reports,
+        (0..=n).map(|k| vec![0x80 | k; 16]).collect::<Vec<_>>()
+    );
 }
 
 #[test]

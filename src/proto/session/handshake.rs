@@ -156,6 +156,7 @@ impl Session {
         }
         p.phase = Phase::Connected;
         p.connected_at = Some(now.mono);
+        p.hold_udp(now.mono, self.limits.udp_after_descriptions);
         if let Kind::Client(c) = &mut self.kind {
             c.connected();
         }

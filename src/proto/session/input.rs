@@ -345,10 +345,16 @@ impl Session {
     }
 
     /// The outbound UDP socket to `peer`'s announced address opened (or not).
-    pub fn handle_udp_out(&mut self, _now: Now, peer: PeerId, ok: bool) {
+    pub fn handle_udp_out(&mut self, now: Now, peer: PeerId, ok: bool) {
+        let hold = self.limits.udp_after_descriptions;
         if let Some(p) = self.peer_mut(peer) {
             p.udp_ready = ok;
+            if ok {
+                p.udp_tx.allocate();
+            }
+            p.hold_udp(now.mono, hold);
         }
+        self.timeouts_changed();
     }
 
     /// Where datagrams received for `peer` go, when the session can take more now.

@@ -111,6 +111,9 @@ impl Session {
             if let Some(pass) = &p.clock_pass {
                 at(pass.until);
             }
+            if let Some(t) = p.udp_held_until {
+                at(t);
+            }
         }
         match &self.kind {
             Kind::Client(c) if self.peers.iter().flatten().next().is_none() => {
@@ -136,6 +139,10 @@ impl Session {
         for p in self.peers.iter_mut().flatten() {
             if p.clock_pass.is_some_and(|pass| now.mono >= pass.until) {
                 p.clock_pass = None;
+            }
+            if p.udp_held_until.is_some_and(|t| now.mono >= t) {
+                p.udp_held_until = None;
+                p.udp_hold_probe = None;
             }
         }
         for slot in 0..self.peers.len() {
@@ -291,6 +298,7 @@ impl Session {
                 continue;
             };
             while let Some(q) = c.poll_query(now) {
+                p.note_clock_query(q.id);
                 let mut buf = [0u8; crate::wire::payload::clock::Query::LEN];
                 let n = q.encode(&mut buf);
                 let _ = p.pack(

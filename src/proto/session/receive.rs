@@ -688,10 +688,14 @@ impl Session {
             let Ok(r) = Reply::decode(payload) else {
                 return None;
             };
+            // The peer has read what went before the query: unreliable messages may take UDP.
+            let hold_ended = p.note_clock_reply(r.id);
             if let Some(c) = p.clock.as_deref_mut() {
                 // t4: after the reply's bytes were read.
                 c.handle_reply(&r, now.fresh());
                 p.clock_pass = None;
+                self.timeouts_changed();
+            } else if hold_ended {
                 self.timeouts_changed();
             }
         }

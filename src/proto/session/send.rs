@@ -64,11 +64,14 @@ impl Session {
             system::TYPE_DESCRIPTION
         };
         let replay = self.is_replay();
+        let hold = self.limits.udp_after_descriptions;
         for p in self.peers.iter_mut().flatten() {
             if !(replay && p.id.slot == 0) {
                 let _ = p.pack(now.wall, id, t, &buf[..n], class::RELIABLE);
+                p.hold_udp(now.mono, hold);
             }
         }
+        self.timeouts_changed();
         self.log_outgoing(t, id, now.wall, &buf[..n]);
     }
 
