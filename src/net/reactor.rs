@@ -23,6 +23,7 @@ use std::time::{Duration, Instant};
 use mio::event::Source;
 use mio::{Events, Interest, Poll, Token};
 
+use super::sys;
 use crate::time::{Now, TimeSource};
 
 /// Token of the timer that wakes the poll at a deadline.
@@ -42,6 +43,10 @@ pub struct Ready {
     /// When the poll woke with the first of these events: the arrival time of the first
     /// byte waiting on a serial port.
     pub woke: Option<Now>,
+    /// Bytes waiting on a descriptor registered with [`Reactor::register_fd`] when the poll
+    /// woke (asked just before the clock was read, so all of them had come by `woke`), where
+    /// the descriptor can tell. A read that finds more than this finds bytes that came later.
+    pub waiting: Option<usize>,
 }
 
 /// Readiness of one socket, shared by the reactor (which sets bits when a poll reports them)
@@ -94,6 +99,8 @@ struct Slot {
     used: bool,
     /// The owner wants the wake time of readable events (serial ports: first-byte time).
     timed: bool,
+    /// The descriptor of a timed registration (asked how many bytes wait at a wake).
+    fd: Option<std::os::fd::RawFd>,
     /// Readiness here is not "activity" (listeners: new connections and connection requests
     /// do not need the busy-poll latency that data does, and a flood of them must not keep a
     /// server spinning).
@@ -148,6 +155,7 @@ impl Reactor {
         slots.push(Slot {
             used: true,
             timed: false,
+            fd: None,
             quiet: true,
             shared: None,
             ready: Ready::default(),
@@ -186,6 +194,7 @@ impl Reactor {
         inner.slots[i] = Slot {
             used: true,
             timed: false,
+            fd: None,
             quiet: false,
             shared: None,
             ready: Ready::default(),
@@ -240,6 +249,7 @@ impl Reactor {
         let token = self.register(&mut mio::unix::SourceFd(&fd), interest)?;
         let mut inner = self.inner.state.borrow_mut();
         inner.slots[token.0].timed = true;
+        inner.slots[token.0].fd = Some(fd);
         inner.timed += 1;
         Ok(token)
     }
@@ -315,16 +325,24 @@ impl Reactor {
             return Ok(false);
         }
         // The time the poll woke, read only when a timed source (a serial port) is ready: the
-        // arrival time of its first byte. Sockets do without it.
-        let woke = (inner.timed > 0
-            && inner.events.iter().any(|ev| {
-                ev.is_readable()
-                    && inner
-                        .slots
-                        .get(ev.token().0)
-                        .is_some_and(|s| s.used && s.timed)
-            }))
-        .then(Now::read);
+        // arrival time of its first byte. Sockets do without it. Each such source that turns
+        // readable is first asked how many bytes wait, so that every one of them had come by
+        // the time read after.
+        let mut timed_ready = false;
+        if inner.timed > 0 {
+            for ev in inner.events.iter().filter(|ev| ev.is_readable()) {
+                let Some(slot) = inner.slots.get_mut(ev.token().0) else {
+                    continue;
+                };
+                if slot.used && slot.timed {
+                    timed_ready = true;
+                    if !slot.ready.readable {
+                        slot.ready.waiting = slot.fd.and_then(sys::bytes_waiting);
+                    }
+                }
+            }
+        }
+        let woke = timed_ready.then(Now::read);
         let mut any = false;
         for ev in inner.events.iter() {
             if ev.token() == TIMER {

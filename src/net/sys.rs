@@ -1,7 +1,8 @@
-//! The two system calls mio does not offer: receiving several datagrams, with their sources,
-//! in one call (`recvmmsg`), and sending datagrams to many destinations in one call
-//! (`sendmmsg`). The crate's only `unsafe` code outside the programs' signal handlers, the C and
-//! Python bindings and the drivers' device ioctls lives here.
+//! The system calls mio does not offer: receiving several datagrams, with their sources, in
+//! one call (`recvmmsg`), sending datagrams to many destinations in one call (`sendmmsg`), and
+//! asking how many bytes wait on a descriptor (`FIONREAD`). The crate's only `unsafe` code
+//! outside the programs' signal handlers, the C and Python bindings and the drivers' device
+//! ioctls lives here.
 #![allow(unsafe_code)]
 
 use std::io;
@@ -15,6 +16,16 @@ use nix::libc;
 use mio::net::UdpSocket;
 
 use crate::proto::buffers::{DatagramInbox, INBOX_SLOT, INBOX_SLOTS};
+
+/// Bytes waiting to be read on `fd` (a terminal, a pipe: `FIONREAD`), or `None` where the
+/// descriptor cannot tell.
+pub(crate) fn bytes_waiting(fd: std::os::fd::RawFd) -> Option<usize> {
+    let mut n: nix::libc::c_int = 0;
+    // SAFETY: FIONREAD writes one int through the pointer, which points at `n`; a descriptor
+    // that is not open or does not support the request makes it fail with an error code.
+    let r = unsafe { nix::libc::ioctl(fd, nix::libc::FIONREAD as _, &mut n) };
+    (r == 0).then(|| usize::try_from(n).ok()).flatten()
+}
 
 /// Receives up to [`INBOX_SLOTS`] datagrams with one `recvmmsg` call, recording each one's
 /// length and source. Returns how many arrived.

@@ -294,22 +294,33 @@ impl<D: SerialDriver> SerialDevice<D> {
 
     /// Reads everything waiting, handing it to the driver with the time the poll woke for it.
     ///
+    /// Only the bytes that were waiting when the poll woke carry its time: on a loaded machine
+    /// the read can come milliseconds after the wake, and bytes that came meanwhile (the next
+    /// record's head) are handed over apart, stamped with a clock read after the read that
+    /// found them — never earlier than they came.
+    ///
     /// With `even_if_not_woken` it also reads when the poll did not report the port readable
     /// (stamped with `now`): before a deadline acts on silence, bytes that came while the
     /// process was not running (a loaded machine) are taken first, so a device that spoke in
     /// time is not treated as silent.
     fn read_all(&mut self, now: Now, even_if_not_woken: bool) {
-        let arrived = match (&self.reactor, self.token) {
+        let (arrived, waiting) = match (&self.reactor, self.token) {
             (Some(r), Some(t)) => {
                 let ready = r.take(t);
                 if !ready.readable && !even_if_not_woken {
                     return;
                 }
-                ready.woke.unwrap_or(now)
+                match ready.woke {
+                    Some(woke) => (woke, ready.waiting),
+                    None => (now, None),
+                }
             }
             // No poll (a loopback connection): read every pass, stamped with the pass time.
-            _ => now,
+            _ => (now, None),
         };
+        // Bytes still to be read that were waiting at the wake (unknown: all of them).
+        let mut from_wake = waiting.unwrap_or(usize::MAX);
+        let opens = self.opens;
         loop {
             let Some(port) = self.port.as_ref() else {
                 return;
@@ -320,8 +331,21 @@ impl<D: SerialDriver> SerialDevice<D> {
                     return;
                 }
                 Ok(n) => {
-                    self.driver.received(&self.buf[..n], arrived, &mut self.ops);
-                    self.carry_out(now);
+                    let early = n.min(from_wake);
+                    from_wake -= early;
+                    if early > 0 {
+                        self.driver
+                            .received(&self.buf[..early], arrived, &mut self.ops);
+                        self.carry_out(now);
+                    }
+                    // The rest came after the wake (unless the driver's request closed or
+                    // reopened the port: then they belong to a line that is gone).
+                    if early < n && self.port.is_some() && self.opens == opens {
+                        let later = Now::read();
+                        self.driver
+                            .received(&self.buf[early..n], later, &mut self.ops);
+                        self.carry_out(now);
+                    }
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -384,5 +408,95 @@ impl<D: SerialDriver> ServerDevice for SerialDevice<D> {
         .into_iter()
         .flatten()
         .min()
+    }
+}
+
+#[cfg(all(test, feature = "sim"))]
+mod tests {
+    use std::cell::RefCell;
+    use std::net::Ipv4Addr;
+
+    use super::*;
+    use crate::serial::{PortKind, PortSettings};
+    use crate::sim::{DeviceModel, PtyDevice};
+
+    /// Sends what it is given, at once.
+    struct Speaker(Vec<u8>);
+
+    impl DeviceModel for Speaker {
+        fn receive(&mut self, _bytes: &[u8], _now: Now) {}
+        fn transmit(&mut self, _now: Now, out: &mut Vec<u8>) {
+            out.append(&mut self.0);
+        }
+        fn next_deadline(&self) -> Option<Instant> {
+            None
+        }
+    }
+
+    /// Keeps every byte it is handed with the time it came with.
+    struct Recorder(Rc<RefCell<Vec<(u8, Now)>>>);
+
+    impl SerialDriver for Recorder {
+        fn name(&self) -> &str {
+            "Recorder"
+        }
+        fn port_kind(&self) -> PortKind {
+            PortKind::Serial(PortSettings::n81(115_200))
+        }
+        fn opened(&mut self, _now: Now, _port: &mut PortOps) {}
+        fn received(&mut self, bytes: &[u8], arrived: Now, _port: &mut PortOps) {
+            self.0
+                .borrow_mut()
+                .extend(bytes.iter().map(|&b| (b, arrived)));
+        }
+        fn poll(&mut self, _now: Now, _port: &mut PortOps) {}
+        fn next_deadline(&self) -> Option<Instant> {
+            None
+        }
+        fn closed(&mut self, _now: Now) {}
+    }
+
+    /// A server slow to read after its poll woke (a loaded machine) finds the next record's
+    /// head behind the bytes it woke for: those bytes keep the wake time, the later ones are
+    /// not dated back to it (before they existed).
+    #[test]
+    fn bytes_that_came_after_the_wake_are_not_dated_back_to_it() {
+        let dir = std::env::temp_dir().join(format!("vrpn-serial-wake-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("tty");
+        let mut line = PtyDevice::open(Speaker(Vec::new()), &link).unwrap();
+        let conn = Connection::server(Some(Ipv4Addr::LOCALHOST), 0).unwrap();
+        let reactor = conn.reactor().expect("a server connection polls");
+        let got = Rc::default();
+        let mut dev = SerialDevice::new(link.to_str().unwrap(), Recorder(Rc::clone(&got)), &conn);
+        dev.mainloop(Now::read());
+        assert!(dev.is_open());
+
+        line.model.0.extend_from_slice(b"abc");
+        line.step(Now::read()).unwrap();
+        let give_up = Instant::now() + Duration::from_secs(10);
+        while !reactor.timed_pending() {
+            assert!(Instant::now() < give_up, "the port never turned readable");
+            reactor.wait(None, Duration::from_millis(10)).unwrap();
+        }
+        // The poll has woken; the next record's head comes before the server reads.
+        std::thread::sleep(Duration::from_millis(5));
+        let second = Now::read();
+        line.model.0.extend_from_slice(b"XYZ");
+        line.step(second).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        dev.mainloop(Now::read());
+
+        let got = got.borrow();
+        let bytes: Vec<u8> = got.iter().map(|&(b, _)| b).collect();
+        assert_eq!(bytes, b"abcXYZ");
+        let stamp = |b: u8| got.iter().find(|g| g.0 == b).unwrap().1;
+        assert!(stamp(b'a').wall < second.wall, "{got:?}");
+        assert!(
+            stamp(b'X').wall >= second.wall,
+            "dated before it was written: {got:?}"
+        );
+        drop(line);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

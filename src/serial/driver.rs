@@ -182,8 +182,10 @@ pub trait SerialDriver {
     /// The port was opened, at start and after every reopen: begin the reset sequence.
     fn opened(&mut self, now: Now, port: &mut PortOps);
 
-    /// Bytes arrived. `arrived` is when the poll woke for the first of them: any record whose
-    /// first byte is in `bytes` carries this time, even if it completes in a later call.
+    /// Bytes arrived. `arrived` is when the first of them came, as well as the serial layer
+    /// can tell: the time the poll woke for them, or, for bytes that came after that wake and
+    /// before a late read, the time of that read. Any record whose first byte is in `bytes`
+    /// carries this time, even if it completes in a later call.
     /// Parse byte by byte: `bytes` may hold part of a record, several records, or garbage.
     fn received(&mut self, bytes: &[u8], arrived: Now, port: &mut PortOps);
 

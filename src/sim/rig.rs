@@ -478,16 +478,17 @@ pub fn assert_run_of<T: PartialEq + Debug>(
 /// `t0`).
 ///
 /// Reports stamped with the same time came from one read (a read takes everything that
-/// arrived since the poll woke, and stamps it with the wake time): each such read counts once,
-/// with the lag of its first record. Over the reads, the median lag lies between −2 ms and
+/// arrived since the poll woke; what was waiting at the wake gets the wake time): each such
+/// read counts once, with the lag of its first record. Over the reads, the median lag lies between −2 ms and
 /// `max_lag` / 5, and at most one in ten (at least two allowed) exceeds `max_lag`: those
 /// are the reader starved on a loaded machine (CI runs many servers at once), which then finds
 /// a backlog. No report may be stamped more than 50 ms before its byte left. A stamp taken at
 /// the end of a record, or when it was decoded, is late for every read and shows in the
 /// median.
 ///
-/// A stamp may come a little *before* its byte left: a record whose first byte arrived
-/// between the wake and the read gets the earlier time.
+/// `sent_at` is when the byte was due on the line; the simulator's write can come later, so a
+/// stamp is compared with a time at or before the byte's real arrival. (The serial layer
+/// stamps bytes that came after the wake with the late read's time, never the wake's.)
 pub fn assert_first_byte_stamps(
     stamps: &[TimeVal],
     sent_at: &[Instant],
